@@ -1,0 +1,62 @@
+#pragma once
+// Reading and writing tet meshes and triangle surfaces. The format follows the file extension:
+//
+//   tet meshes  .mesh (Medit, ASCII)   .msh (Gmsh 2.2 / 4.1, ASCII)   .node/.ele (TetGen)
+//               .vtu (VTK XML: ascii, base64, appended raw, zlib)   .vtk (legacy VTK, ASCII/binary)
+//   surfaces    .obj   .off   .ply (ASCII / binary)   .stl (ASCII / binary)
+//
+// Readers throw tetcut::Error naming the file, the line (text formats) and the problem. Writers
+// write to a temporary file beside the target and rename it into place when complete.
+
+#include <tetcut/surface.hpp>
+#include <tetcut/tet_mesh.hpp>
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+namespace tetcut {
+
+/// One value per tet, written as a cell array where the format has them (.vtu, .vtk).
+struct CellField {
+  std::string name;
+  std::vector<double> values;
+  bool integer = false;  ///< written as Int64 when true
+};
+
+struct TetMeshWriteOptions {
+  /// Gmsh file version for .msh: 41 (4.1) or 22 (2.2).
+  int gmsh_version = 41;
+  /// Write current (deformed) positions instead of rest positions.
+  bool current_positions = false;
+  std::vector<CellField> cell_fields;
+};
+
+struct SurfaceWriteOptions {
+  /// PLY: binary little-endian instead of ASCII. STL: binary (single precision, as the format
+  /// requires) instead of ASCII with full double precision.
+  bool binary = false;
+};
+
+enum class FileKind { kTetMesh, kSurface, kUnknown };
+
+/// What a path holds, judged by its extension.
+FileKind file_kind(const std::filesystem::path& path);
+
+/// Reads a tet mesh. For TetGen, `path` may name the .node or the .ele file; both are read.
+TetMesh read_tet_mesh(const std::filesystem::path& path);
+/// Writes a tet mesh. For TetGen, both `stem.node` and `stem.ele` are written.
+void write_tet_mesh(const std::filesystem::path& path, const TetMesh& mesh, const TetMeshWriteOptions& options = {});
+
+/// Reads a triangle surface. Polygons with more than three corners are split into a fan of
+/// triangles around their first corner. STL vertices are shared where coordinates are
+/// bit-for-bit equal (STL stores each triangle's corners separately).
+TriangleSurface read_surface(const std::filesystem::path& path);
+void write_surface(const std::filesystem::path& path, const TriangleSurface& surface,
+                   const SurfaceWriteOptions& options = {});
+
+/// Lists the extensions each kind accepts, for help texts.
+std::string supported_tet_mesh_extensions();
+std::string supported_surface_extensions();
+
+}  // namespace tetcut

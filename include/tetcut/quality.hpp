@@ -1,0 +1,38 @@
+#pragma once
+// Size and shape measures of a tet mesh: what `tetcut info` reports, and what sets the stable
+// time step of an explicit simulation (the smallest altitude).
+
+#include <tetcut/surface.hpp>
+#include <tetcut/tet_mesh.hpp>
+
+namespace tetcut {
+
+struct MeshQuality {
+  Vec3 bbox_min = Vec3::Zero();
+  Vec3 bbox_max = Vec3::Zero();
+  double volume = 0;               ///< sum of signed tet volumes
+  double min_volume = 0;           ///< smallest tet volume
+  double min_dihedral_degrees = 0; ///< over all six dihedral angles of all tets
+  double max_dihedral_degrees = 0;
+  double min_altitude = 0;         ///< smallest distance from a tet vertex to its opposite face
+  Index num_unused_nodes = 0;      ///< nodes referenced by no tet
+};
+
+/// Measures `mesh` in rest positions, or in current positions when `current` is true. O(V + T).
+MeshQuality measure_quality(const TetMesh& mesh, bool current = false);
+
+struct SurfaceStats {
+  Vec3 bbox_min = Vec3::Zero();
+  Vec3 bbox_max = Vec3::Zero();
+  double area = 0;
+  /// Volume enclosed, by the divergence theorem; meaningful when the surface is closed.
+  double enclosed_volume = 0;
+  Index num_boundary_edges = 0;      ///< edges with one incident triangle
+  Index num_nonmanifold_edges = 0;   ///< edges with three or more incident triangles
+  Index num_degenerate_triangles = 0;///< triangles with (exactly) collinear corners
+  bool closed = false;               ///< every edge has exactly two incident triangles
+};
+
+SurfaceStats measure_surface(const TriangleSurface& surface);
+
+}  // namespace tetcut

@@ -1,0 +1,62 @@
+#pragma once
+// Per-format readers and writers behind tetcut/io.hpp. Readers parse bytes already in memory;
+// writers write to a stream. `source` names the file in error messages.
+
+#include <tetcut/io.hpp>
+
+#include <cstdint>
+#include <ostream>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace tetcut::io {
+
+/// A tet mesh as parsed, before validation by the TetMesh constructor.
+struct TetMeshData {
+  Points points;
+  Tets tets;
+  std::vector<std::int64_t> tet_lines;  ///< source line of each tet; empty for binary data
+};
+
+TetMeshData read_medit(std::string_view text, const std::string& source);
+void write_medit(std::ostream& out, const Points& points, const Tets& tets);
+
+TetMeshData read_gmsh(std::string_view text, const std::string& source);
+void write_gmsh(std::ostream& out, const Points& points, const Tets& tets, int version);
+
+TetMeshData read_tetgen(std::string_view node_text, const std::string& node_source, std::string_view ele_text,
+                        const std::string& ele_source);
+void write_tetgen_node(std::ostream& out, const Points& points);
+void write_tetgen_ele(std::ostream& out, const Tets& tets);
+
+TetMeshData read_vtu(std::string_view bytes, const std::string& source);
+void write_vtu(std::ostream& out, const Points& points, const Tets& tets, const std::vector<CellField>& fields);
+
+TetMeshData read_vtk_legacy(std::string_view bytes, const std::string& source);
+void write_vtk_legacy(std::ostream& out, const Points& points, const Tets& tets, const std::vector<CellField>& fields);
+
+TriangleSurface read_obj(std::string_view text, const std::string& source);
+void write_obj(std::ostream& out, const TriangleSurface& surface);
+TriangleSurface read_off(std::string_view text, const std::string& source);
+void write_off(std::ostream& out, const TriangleSurface& surface);
+TriangleSurface read_ply(std::string_view bytes, const std::string& source);
+void write_ply(std::ostream& out, const TriangleSurface& surface, bool binary);
+TriangleSurface read_stl(std::string_view bytes, const std::string& source);
+void write_stl(std::ostream& out, const TriangleSurface& surface, bool binary);
+
+/// Writes `value` in the shortest decimal form that reads back to the same double.
+void write_real(std::ostream& out, double value);
+
+/// Copies parsed rows into a |rows| x C Eigen buffer.
+Points to_points(const std::vector<double>& xyz);
+Tets to_tets(const std::vector<Index>& ids);
+Triangles to_triangles(const std::vector<Index>& ids);
+
+/// Fails with a message naming `source` when a count read from a header is negative or
+/// implausibly large for the file (each item needs at least `min_bytes_per_item` bytes), so a
+/// corrupt count cannot make us allocate gigabytes.
+void check_count(std::int64_t count, std::size_t file_size, std::size_t min_bytes_per_item, const char* what,
+                 const std::string& source, std::int64_t line);
+
+}  // namespace tetcut::io

@@ -1,0 +1,138 @@
+#include <tetcut/error.hpp>
+#include <tetcut/io.hpp>
+
+#include "io/files.hpp"
+#include "io/formats.hpp"
+
+namespace tetcut {
+namespace {
+
+constexpr const char* kTetMeshExtensions[] = {".mesh", ".msh", ".node", ".ele", ".vtu", ".vtk"};
+constexpr const char* kSurfaceExtensions[] = {".obj", ".off", ".ply", ".stl"};
+
+std::string join(const char* const* begin, const char* const* end) {
+  std::string out;
+  for (const char* const* p = begin; p != end; ++p) {
+    if (!out.empty()) out += ' ';
+    out += *p;
+  }
+  return out;
+}
+
+[[noreturn]] void unknown_extension(const std::filesystem::path& path, const char* kind, const std::string& allowed) {
+  throw Error(ErrorKind::kInvalidArgument,
+              "cannot tell the " + std::string(kind) + " format from the extension '" + io::extension_of(path) +
+                  "' (supported: " + allowed + ")",
+              path.string());
+}
+
+const Points& positions(const TetMesh& mesh, const TetMeshWriteOptions& options) {
+  return options.current_positions ? mesh.current() : mesh.rest();
+}
+
+}  // namespace
+
+std::string supported_tet_mesh_extensions() {
+  return join(std::begin(kTetMeshExtensions), std::end(kTetMeshExtensions));
+}
+std::string supported_surface_extensions() {
+  return join(std::begin(kSurfaceExtensions), std::end(kSurfaceExtensions));
+}
+
+FileKind file_kind(const std::filesystem::path& path) {
+  const std::string ext = io::extension_of(path);
+  for (const char* e : kTetMeshExtensions) {
+    if (ext == e) return FileKind::kTetMesh;
+  }
+  for (const char* e : kSurfaceExtensions) {
+    if (ext == e) return FileKind::kSurface;
+  }
+  return FileKind::kUnknown;
+}
+
+TetMesh read_tet_mesh(const std::filesystem::path& path) {
+  const std::string ext = io::extension_of(path);
+  io::TetMeshData data;
+  std::string source = path.string();
+  if (ext == ".node" || ext == ".ele") {
+    std::filesystem::path node_path = path, ele_path = path;
+    node_path.replace_extension(".node");
+    ele_path.replace_extension(".ele");
+    const std::string node_text = io::read_file(node_path);
+    const std::string ele_text = io::read_file(ele_path);
+    data = io::read_tetgen(node_text, node_path.string(), ele_text, ele_path.string());
+    source = ele_path.string();
+  } else {
+    const std::string bytes = io::read_file(path);
+    if (ext == ".mesh") {
+      data = io::read_medit(bytes, source);
+    } else if (ext == ".msh") {
+      data = io::read_gmsh(bytes, source);
+    } else if (ext == ".vtu") {
+      data = io::read_vtu(bytes, source);
+    } else if (ext == ".vtk") {
+      data = io::read_vtk_legacy(bytes, source);
+    } else {
+      unknown_extension(path, "tet mesh", supported_tet_mesh_extensions());
+    }
+  }
+  return TetMesh(std::move(data.points), std::move(data.tets), source, data.tet_lines);
+}
+
+void write_tet_mesh(const std::filesystem::path& path, const TetMesh& mesh, const TetMeshWriteOptions& options) {
+  for (const CellField& field : options.cell_fields) {
+    if (static_cast<Index>(field.values.size()) != mesh.num_tets()) {
+      throw Error(ErrorKind::kInvalidArgument, "cell field '" + field.name + "' has " +
+                                                   std::to_string(field.values.size()) + " values for " +
+                                                   std::to_string(mesh.num_tets()) + " tets");
+    }
+  }
+  const std::string ext = io::extension_of(path);
+  const Points& points = positions(mesh, options);
+  if (ext == ".node" || ext == ".ele") {
+    std::filesystem::path node_path = path, ele_path = path;
+    node_path.replace_extension(".node");
+    ele_path.replace_extension(".ele");
+    io::AtomicOutput node_out(node_path), ele_out(ele_path);
+    io::write_tetgen_node(node_out.stream(), points);
+    io::write_tetgen_ele(ele_out.stream(), mesh.tets());
+    node_out.commit();
+    ele_out.commit();
+    return;
+  }
+  if (ext != ".mesh" && ext != ".msh" && ext != ".vtu" && ext != ".vtk") {
+    unknown_extension(path, "tet mesh", supported_tet_mesh_extensions());
+  }
+  io::AtomicOutput out(path, ext == ".vtu");
+  if (ext == ".mesh") io::write_medit(out.stream(), points, mesh.tets());
+  if (ext == ".msh") io::write_gmsh(out.stream(), points, mesh.tets(), options.gmsh_version);
+  if (ext == ".vtu") io::write_vtu(out.stream(), points, mesh.tets(), options.cell_fields);
+  if (ext == ".vtk") io::write_vtk_legacy(out.stream(), points, mesh.tets(), options.cell_fields);
+  out.commit();
+}
+
+TriangleSurface read_surface(const std::filesystem::path& path) {
+  const std::string ext = io::extension_of(path);
+  if (file_kind(path) != FileKind::kSurface) unknown_extension(path, "surface", supported_surface_extensions());
+  const std::string bytes = io::read_file(path);
+  const std::string source = path.string();
+  TriangleSurface surface;
+  if (ext == ".obj") surface = io::read_obj(bytes, source);
+  if (ext == ".off") surface = io::read_off(bytes, source);
+  if (ext == ".ply") surface = io::read_ply(bytes, source);
+  if (ext == ".stl") surface = io::read_stl(bytes, source);
+  return surface;
+}
+
+void write_surface(const std::filesystem::path& path, const TriangleSurface& surface, const SurfaceWriteOptions& options) {
+  const std::string ext = io::extension_of(path);
+  if (file_kind(path) != FileKind::kSurface) unknown_extension(path, "surface", supported_surface_extensions());
+  io::AtomicOutput out(path, options.binary);
+  if (ext == ".obj") io::write_obj(out.stream(), surface);
+  if (ext == ".off") io::write_off(out.stream(), surface);
+  if (ext == ".ply") io::write_ply(out.stream(), surface, options.binary);
+  if (ext == ".stl") io::write_stl(out.stream(), surface, options.binary);
+  out.commit();
+}
+
+}  // namespace tetcut

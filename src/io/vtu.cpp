@@ -1,0 +1,342 @@
+// VTK XML unstructured grid (.vtu). Reads every encoding VTK and ParaView write: ascii, inline
+// base64 ("binary"), appended raw or base64, each optionally zlib-compressed, with 32- or 64-bit
+// headers and either byte order. Tetrahedra (VTK cell type 10) are kept, other cells skipped.
+// Writes inline base64 with 64-bit headers, uncompressed.
+
+#include <pugixml.hpp>
+
+#include <algorithm>
+#include <cstring>
+#include <string>
+
+#include "io/binary.hpp"
+#include "io/formats.hpp"
+#include "io/text_scanner.hpp"
+
+namespace tetcut::io {
+namespace {
+
+constexpr int kVtkTetra = 10;
+
+enum class Scalar { kInt8, kUInt8, kInt16, kUInt16, kInt32, kUInt32, kInt64, kUInt64, kFloat32, kFloat64 };
+
+struct ScalarInfo {
+  const char* name;
+  Scalar type;
+  std::size_t size;
+};
+constexpr ScalarInfo kScalars[] = {
+    {"Int8", Scalar::kInt8, 1},     {"UInt8", Scalar::kUInt8, 1},   {"Int16", Scalar::kInt16, 2},
+    {"UInt16", Scalar::kUInt16, 2}, {"Int32", Scalar::kInt32, 4},   {"UInt32", Scalar::kUInt32, 4},
+    {"Int64", Scalar::kInt64, 8},   {"UInt64", Scalar::kUInt64, 8}, {"Float32", Scalar::kFloat32, 4},
+    {"Float64", Scalar::kFloat64, 8},
+};
+
+class VtuReader {
+ public:
+  VtuReader(std::string_view bytes, std::string source) : bytes_(bytes), source_(std::move(source)) {}
+
+  TetMeshData read();
+
+ private:
+  [[noreturn]] void fail(const std::string& message, std::ptrdiff_t offset = -1) const {
+    std::int64_t line = 0;
+    if (offset >= 0) line = 1 + std::count(bytes_.begin(), bytes_.begin() + offset, '\n');
+    throw Error(ErrorKind::kInvalidInput, message, source_, line);
+  }
+  std::ptrdiff_t offset_of(const pugi::xml_node& node) const { return node.offset_debug(); }
+
+  const ScalarInfo& scalar_of(const pugi::xml_node& array) const {
+    const std::string type = array.attribute("type").as_string();
+    for (const ScalarInfo& info : kScalars) {
+      if (type == info.name) return info;
+    }
+    fail("DataArray has unknown type '" + type + "'", offset_of(array));
+  }
+
+  std::uint64_t header_value(std::string_view block, std::size_t i) const {
+    return header_bytes_ == 8 ? load<std::uint64_t>(block.data() + 8 * i, order_)
+                              : load<std::uint32_t>(block.data() + 4 * i, order_);
+  }
+
+  // The decoded bytes of a binary or appended array (after decompression), header removed.
+  std::string binary_payload(const pugi::xml_node& array, bool appended);
+  // Values of an array converted to double, and the count checked against `expected` (if >= 0).
+  template <typename T>
+  std::vector<T> values(const pugi::xml_node& array, std::int64_t expected);
+
+  std::string_view bytes_;
+  std::string source_;
+  ByteOrder order_ = ByteOrder::kLittle;
+  std::size_t header_bytes_ = 4;
+  bool compressed_ = false;
+  std::string_view appended_;   // what follows the '_' marker of <AppendedData>
+  bool appended_base64_ = false;
+  std::string_view xml_text_;
+};
+
+std::string VtuReader::binary_payload(const pugi::xml_node& array, bool appended) {
+  const std::ptrdiff_t where = offset_of(array);
+  // `fetch(n)` returns the first n decoded bytes of this array's encoded stream.
+  std::string inline_bytes;
+  std::string scratch;
+  std::string_view stream;
+  std::size_t array_offset = 0;
+  if (appended) {
+    const auto offset_attr = array.attribute("offset");
+    if (!offset_attr) fail("appended DataArray has no offset attribute", where);
+    array_offset = offset_attr.as_ullong();
+    if (array_offset > appended_.size()) fail("DataArray offset lies past the end of the appended data", where);
+    stream = appended_.substr(array_offset);
+  } else {
+    if (!base64_decode(array.text().get(), SIZE_MAX, inline_bytes)) fail("DataArray holds invalid base64", where);
+  }
+  const bool base64_stream = appended && appended_base64_;
+  auto fetch = [&](std::size_t n) -> std::string_view {
+    if (base64_stream) {
+      scratch.clear();
+      if (!base64_decode(stream, n, scratch) || scratch.size() < n) fail("appended base64 data is truncated", where);
+      return scratch;
+    }
+    const std::string_view all = appended ? stream : std::string_view(inline_bytes);
+    if (all.size() < n) fail("binary data is truncated", where);
+    return all.substr(0, n);
+  };
+
+  if (!compressed_) {
+    const std::uint64_t size = header_value(fetch(header_bytes_), 0);
+    if (size > bytes_.size() * 4 + 1024) fail("DataArray announces more bytes than the file can hold", where);
+    return std::string(fetch(header_bytes_ + size).substr(header_bytes_));
+  }
+  const std::uint64_t blocks = header_value(fetch(3 * header_bytes_), 0);
+  if (blocks > bytes_.size()) fail("compressed DataArray announces more blocks than the file can hold", where);
+  const std::size_t header_size = (3 + blocks) * header_bytes_;
+  std::string header(fetch(header_size));
+  const std::uint64_t block_size = header_value(header, 1);
+  const std::uint64_t last_size = header_value(header, 2);
+  std::uint64_t total_compressed = 0;
+  for (std::uint64_t b = 0; b < blocks; ++b) total_compressed += header_value(header, 3 + b);
+  if (total_compressed > bytes_.size()) fail("compressed sizes exceed the file size", where);
+  const std::string_view all = fetch(header_size + total_compressed);
+  std::string out;
+  std::size_t pos = header_size;
+  for (std::uint64_t b = 0; b < blocks; ++b) {
+    const std::uint64_t csize = header_value(header, 3 + b);
+    const std::uint64_t usize = (b + 1 == blocks && last_size != 0) ? last_size : block_size;
+    if (usize > (std::uint64_t{1} << 34)) fail("compressed block size is implausible", where);
+    if (!zlib_inflate(all.substr(pos, csize), usize, out)) fail("corrupt zlib data in DataArray", where);
+    pos += csize;
+  }
+  return out;
+}
+
+template <typename T>
+std::vector<T> VtuReader::values(const pugi::xml_node& array, std::int64_t expected) {
+  const std::ptrdiff_t where = offset_of(array);
+  const ScalarInfo& scalar = scalar_of(array);
+  const std::string format = array.attribute("format").as_string("ascii");
+  const std::string name = array.attribute("Name").as_string("(unnamed)");
+  std::vector<T> out;
+  if (format == "ascii") {
+    const std::string_view text = array.text().get();
+    TextScanner in(text, source_, '\0');
+    while (auto token = in.try_token()) {
+      if constexpr (std::is_floating_point_v<T>) {
+        const auto v = parse_real(*token);
+        if (!v) fail("DataArray '" + name + "' holds '" + std::string(*token) + "', not a number", where);
+        out.push_back(*v);
+      } else {
+        const auto v = parse_integer(*token);
+        if (!v) fail("DataArray '" + name + "' holds '" + std::string(*token) + "', not an integer", where);
+        out.push_back(static_cast<T>(*v));
+      }
+    }
+  } else if (format == "binary" || format == "appended") {
+    const std::string payload = binary_payload(array, format == "appended");
+    if (payload.size() % scalar.size != 0) fail("DataArray '" + name + "' has a partial value", where);
+    const std::size_t n = payload.size() / scalar.size;
+    out.resize(n);
+    const char* p = payload.data();
+    for (std::size_t i = 0; i < n; ++i, p += scalar.size) {
+      switch (scalar.type) {
+        case Scalar::kInt8: out[i] = static_cast<T>(load<std::int8_t>(p, order_)); break;
+        case Scalar::kUInt8: out[i] = static_cast<T>(load<std::uint8_t>(p, order_)); break;
+        case Scalar::kInt16: out[i] = static_cast<T>(load<std::int16_t>(p, order_)); break;
+        case Scalar::kUInt16: out[i] = static_cast<T>(load<std::uint16_t>(p, order_)); break;
+        case Scalar::kInt32: out[i] = static_cast<T>(load<std::int32_t>(p, order_)); break;
+        case Scalar::kUInt32: out[i] = static_cast<T>(load<std::uint32_t>(p, order_)); break;
+        case Scalar::kInt64: out[i] = static_cast<T>(load<std::int64_t>(p, order_)); break;
+        case Scalar::kUInt64: out[i] = static_cast<T>(load<std::uint64_t>(p, order_)); break;
+        case Scalar::kFloat32: out[i] = static_cast<T>(load<float>(p, order_)); break;
+        case Scalar::kFloat64: out[i] = static_cast<T>(load<double>(p, order_)); break;
+      }
+    }
+  } else {
+    fail("DataArray '" + name + "' has unknown format '" + format + "'", where);
+  }
+  if (expected >= 0 && static_cast<std::int64_t>(out.size()) != expected) {
+    fail("DataArray '" + name + "' holds " + std::to_string(out.size()) + " values, expected " +
+             std::to_string(expected),
+         where);
+  }
+  return out;
+}
+
+TetMeshData VtuReader::read() {
+  // Appended raw data is not XML; parse only what precedes it.
+  xml_text_ = bytes_;
+  std::string xml_copy;
+  const std::size_t appended_tag = bytes_.find("<AppendedData");
+  if (appended_tag != std::string_view::npos) {
+    const std::size_t tag_end = bytes_.find('>', appended_tag);
+    const std::size_t marker = bytes_.find('_', tag_end);
+    if (tag_end == std::string_view::npos || marker == std::string_view::npos) {
+      fail("malformed <AppendedData> element", static_cast<std::ptrdiff_t>(appended_tag));
+    }
+    const std::string_view tag = bytes_.substr(appended_tag, tag_end - appended_tag);
+    appended_base64_ = tag.find("base64") != std::string_view::npos;
+    appended_ = bytes_.substr(marker + 1);
+    xml_copy = std::string(bytes_.substr(0, appended_tag)) + "</VTKFile>";
+    xml_text_ = xml_copy;
+  }
+  pugi::xml_document doc;
+  const pugi::xml_parse_result parsed = doc.load_buffer(xml_text_.data(), xml_text_.size());
+  if (!parsed) fail(std::string("not valid XML: ") + parsed.description(), parsed.offset);
+  const pugi::xml_node file = doc.child("VTKFile");
+  if (!file) fail("no <VTKFile> element");
+  if (std::string(file.attribute("type").as_string()) != "UnstructuredGrid") {
+    fail("VTKFile type is '" + std::string(file.attribute("type").as_string()) + "', expected UnstructuredGrid",
+         offset_of(file));
+  }
+  order_ = std::string(file.attribute("byte_order").as_string("LittleEndian")) == "BigEndian" ? ByteOrder::kBig
+                                                                                            : ByteOrder::kLittle;
+  header_bytes_ = std::string(file.attribute("header_type").as_string("UInt32")) == "UInt64" ? 8 : 4;
+  const std::string compressor = file.attribute("compressor").as_string();
+  compressed_ = !compressor.empty();
+  if (compressed_ && compressor != "vtkZLibDataCompressor") {
+    throw Error(ErrorKind::kUnsupported, "compressor " + compressor + " is not supported (zlib is)", source_);
+  }
+  const pugi::xml_node grid = file.child("UnstructuredGrid");
+  if (!grid) fail("no <UnstructuredGrid> element", offset_of(file));
+
+  TetMeshData data;
+  std::vector<double> xyz;
+  std::vector<Index> ids;
+  for (const pugi::xml_node& piece : grid.children("Piece")) {
+    const std::int64_t num_points = piece.attribute("NumberOfPoints").as_llong(-1);
+    const std::int64_t num_cells = piece.attribute("NumberOfCells").as_llong(-1);
+    if (num_points < 0 || num_cells < 0) fail("Piece lacks NumberOfPoints or NumberOfCells", offset_of(piece));
+    const pugi::xml_node points = piece.child("Points").child("DataArray");
+    if (!points) fail("Piece has no <Points> DataArray", offset_of(piece));
+    if (points.attribute("NumberOfComponents").as_int(1) != 3) fail("Points must have 3 components", offset_of(points));
+    const std::vector<double> coords = values<double>(points, num_points * 3);
+    for (std::size_t i = 0; i < coords.size(); ++i) {
+      if (!std::isfinite(coords[i])) {
+        fail("point " + std::to_string(i / 3 + 1) + " has a coordinate that is not a finite number", offset_of(points));
+      }
+    }
+    const Index base = static_cast<Index>(xyz.size() / 3);
+    xyz.insert(xyz.end(), coords.begin(), coords.end());
+
+    pugi::xml_node connectivity, offsets, types;
+    for (const pugi::xml_node& array : piece.child("Cells").children("DataArray")) {
+      const std::string name = array.attribute("Name").as_string();
+      if (name == "connectivity") connectivity = array;
+      if (name == "offsets") offsets = array;
+      if (name == "types") types = array;
+    }
+    if (!connectivity || !offsets || !types) {
+      fail("Cells must hold connectivity, offsets and types arrays", offset_of(piece));
+    }
+    const auto conn = values<std::int64_t>(connectivity, -1);
+    const auto offs = values<std::int64_t>(offsets, num_cells);
+    const auto kinds = values<std::int64_t>(types, num_cells);
+    std::int64_t start = 0;
+    for (std::int64_t c = 0; c < num_cells; ++c) {
+      const std::int64_t end = offs[static_cast<std::size_t>(c)];
+      if (end < start || end > static_cast<std::int64_t>(conn.size())) {
+        fail("cell " + std::to_string(c + 1) + " has an offset out of range", offset_of(offsets));
+      }
+      if (kinds[static_cast<std::size_t>(c)] == kVtkTetra) {
+        if (end - start != 4) fail("tetrahedral cell " + std::to_string(c + 1) + " does not have 4 points",
+                                   offset_of(connectivity));
+        for (std::int64_t k = start; k < end; ++k) {
+          const std::int64_t id = conn[static_cast<std::size_t>(k)];
+          if (id < 0 || id >= num_points) {
+            fail("cell " + std::to_string(c + 1) + " refers to point " + std::to_string(id) + ", but the piece has " +
+                     std::to_string(num_points) + " points (numbered from 0)",
+                 offset_of(connectivity));
+          }
+          ids.push_back(base + static_cast<Index>(id));
+        }
+      }
+      start = end;
+    }
+  }
+  if (ids.empty()) fail("the file holds no tetrahedra (VTK cell type 10)");
+  data.points = to_points(xyz);
+  data.tets = to_tets(ids);
+  return data;
+}
+
+void write_binary_array(std::ostream& out, const char* type, const char* name, int components, const std::string& bytes) {
+  out << "<DataArray type=\"" << type << "\" Name=\"" << name << "\"";
+  if (components != 1) out << " NumberOfComponents=\"" << components << "\"";
+  out << " format=\"binary\">\n";
+  std::string header;
+  store_le<std::uint64_t>(header, bytes.size());
+  // Header and data are encoded as two base64 streams, as VTK itself writes them.
+  out << base64_encode(header) << base64_encode(bytes) << "\n</DataArray>\n";
+}
+
+}  // namespace
+
+TetMeshData read_vtu(std::string_view bytes, const std::string& source) { return VtuReader(bytes, source).read(); }
+
+void write_vtu(std::ostream& out, const Points& points, const Tets& tets, const std::vector<CellField>& fields) {
+  out << "<?xml version=\"1.0\"?>\n"
+         "<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n"
+         "<UnstructuredGrid>\n<Piece NumberOfPoints=\""
+      << points.rows() << "\" NumberOfCells=\"" << tets.rows() << "\">\n<Points>\n";
+  std::string bytes;
+  bytes.reserve(static_cast<std::size_t>(points.size()) * 8);
+  for (Eigen::Index i = 0; i < points.rows(); ++i) {
+    for (int k = 0; k < 3; ++k) store_le<double>(bytes, points(i, k));
+  }
+  write_binary_array(out, "Float64", "Points", 3, bytes);
+  out << "</Points>\n<Cells>\n";
+  bytes.clear();
+  for (Eigen::Index t = 0; t < tets.rows(); ++t) {
+    for (int k = 0; k < 4; ++k) store_le<std::int64_t>(bytes, tets(t, k));
+  }
+  write_binary_array(out, "Int64", "connectivity", 1, bytes);
+  bytes.clear();
+  for (Eigen::Index t = 0; t < tets.rows(); ++t) store_le<std::int64_t>(bytes, 4 * (t + 1));
+  write_binary_array(out, "Int64", "offsets", 1, bytes);
+  bytes.assign(static_cast<std::size_t>(tets.rows()), static_cast<char>(kVtkTetra));
+  write_binary_array(out, "UInt8", "types", 1, bytes);
+  out << "</Cells>\n";
+  if (!fields.empty()) {
+    out << "<CellData>\n";
+    for (const CellField& field : fields) {
+      if (static_cast<Eigen::Index>(field.values.size()) != tets.rows()) {
+        throw Error(ErrorKind::kInvalidArgument, "cell field '" + field.name + "' has " +
+                                                     std::to_string(field.values.size()) + " values for " +
+                                                     std::to_string(tets.rows()) + " cells");
+      }
+      bytes.clear();
+      for (const double v : field.values) {
+        if (field.integer) {
+          store_le<std::int64_t>(bytes, static_cast<std::int64_t>(v));
+        } else {
+          store_le<double>(bytes, v);
+        }
+      }
+      write_binary_array(out, field.integer ? "Int64" : "Float64", field.name.c_str(), 1, bytes);
+    }
+    out << "</CellData>\n";
+  }
+  out << "</Piece>\n</UnstructuredGrid>\n</VTKFile>\n";
+}
+
+}  // namespace tetcut::io
