@@ -8,6 +8,7 @@
 #include <ostream>
 #include <string>
 #include <string_view>
+#include <unordered_map>
 #include <vector>
 
 namespace tetcut::io {
@@ -25,8 +26,14 @@ void write_medit(std::ostream& out, const Points& points, const Tets& tets);
 TetMeshData read_gmsh(std::string_view text, const std::string& source);
 void write_gmsh(std::ostream& out, const Points& points, const Tets& tets, int version);
 
-TetMeshData read_tetgen(std::string_view node_text, const std::string& node_source, std::string_view ele_text,
-                        const std::string& ele_source);
+/// TetGen: parse the .node file first, then the .ele file against its node numbering.
+struct TetgenNodes {
+  std::vector<double> xyz;
+  std::unordered_map<std::int64_t, Index> node_of_id;
+  std::string source;
+};
+TetgenNodes read_tetgen_nodes(std::string_view node_text, const std::string& node_source);
+TetMeshData read_tetgen_elements(TetgenNodes nodes, std::string_view ele_text, const std::string& ele_source);
 void write_tetgen_node(std::ostream& out, const Points& points);
 void write_tetgen_ele(std::ostream& out, const Tets& tets);
 

@@ -58,9 +58,8 @@ TetMesh read_tet_mesh(const std::filesystem::path& path) {
     std::filesystem::path node_path = path, ele_path = path;
     node_path.replace_extension(".node");
     ele_path.replace_extension(".ele");
-    const std::string node_text = io::read_file(node_path);
-    const std::string ele_text = io::read_file(ele_path);
-    data = io::read_tetgen(node_text, node_path.string(), ele_text, ele_path.string());
+    io::TetgenNodes nodes = io::read_tetgen_nodes(io::read_file(node_path), node_path.string());
+    data = io::read_tetgen_elements(std::move(nodes), io::read_file(ele_path), ele_path.string());
     source = ele_path.string();
   } else {
     const std::string bytes = io::read_file(path);

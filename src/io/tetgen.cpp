@@ -9,8 +9,7 @@
 
 namespace tetcut::io {
 
-TetMeshData read_tetgen(std::string_view node_text, const std::string& node_source, std::string_view ele_text,
-                        const std::string& ele_source) {
+TetgenNodes read_tetgen_nodes(std::string_view node_text, const std::string& node_source) {
   TextScanner nodes(node_text, node_source);
   const std::int64_t num_nodes = nodes.integer("node count");
   check_count(num_nodes, node_text.size(), 8, "nodes", node_source, nodes.line());
@@ -31,7 +30,12 @@ TetMeshData read_tetgen(std::string_view node_text, const std::string& node_sour
     for (const char* axis : {"x", "y", "z"}) xyz.push_back(nodes.real(std::string("node ") + axis));
     nodes.rest_of_line();  // attributes and boundary marker
   }
+  return TetgenNodes{std::move(xyz), std::move(node_of_id), node_source};
+}
 
+TetMeshData read_tetgen_elements(TetgenNodes nodes, std::string_view ele_text, const std::string& ele_source) {
+  const auto& node_of_id = nodes.node_of_id;
+  const std::string& node_source = nodes.source;
   TextScanner eles(ele_text, ele_source);
   const std::int64_t num_tets = eles.integer("tetrahedron count");
   check_count(num_tets, ele_text.size(), 10, "tetrahedra", ele_source, eles.line());
@@ -59,7 +63,7 @@ TetMeshData read_tetgen(std::string_view node_text, const std::string& node_sour
     }
     eles.rest_of_line();  // second-order nodes and attributes
   }
-  data.points = to_points(xyz);
+  data.points = to_points(nodes.xyz);
   data.tets = to_tets(ids);
   return data;
 }

@@ -66,7 +66,8 @@ std::optional<std::string_view> TextScanner::try_token() {
 
 std::string_view TextScanner::token(std::string_view what) {
   const auto t = try_token();
-  if (!t) fail_at(line_, "unexpected end of file, expected " + std::string(what));
+  // Report the line of the last token: the trailing newline would otherwise name a line past the data.
+  if (!t) fail("unexpected end of file, expected " + std::string(what));
   return *t;
 }
 

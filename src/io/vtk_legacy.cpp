@@ -73,8 +73,10 @@ struct LegacyReader {
     }
   }
 
+  // METADATA blocks (VTK 9) run to the next blank line.
   void skip_metadata() {
-    while (!in.at_end()) {
+    in.rest_of_line();  // the rest of the METADATA line itself
+    while (in.offset() < bytes.size()) {
       if (is_blank(in.rest_of_line())) return;
     }
   }

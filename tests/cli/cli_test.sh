@@ -1,0 +1,86 @@
+#!/usr/bin/env bash
+# The command-line tool: help, exit codes, error messages, and what each subcommand writes.
+set -euo pipefail
+source "$(dirname "$0")/lib.sh"
+
+# --help works everywhere and exits 0.
+expect_exit 0 "$TETCUT" --help
+for command in grid bcc info convert demo; do
+  expect_exit 0 "$TETCUT" "$command" --help
+  expect_stdout "Usage"
+done
+
+# Usage errors exit 2 with a message.
+expect_exit 2 "$TETCUT"
+expect_exit 2 "$TETCUT" grid --cells 2 2 -o x.vtu
+expect_stderr "error"
+expect_exit 2 "$TETCUT" grid --cells 2 2 2 --tets-per-cube 4 -o x.vtu
+expect_exit 2 "$TETCUT" bcc --box 0 0 0 1 1 1 --spacing -1 -o x.vtu
+expect_exit 2 "$TETCUT" grid --cells 2 2 2 -o x.txt
+expect_stderr "x.txt"
+[[ ! -e x.vtu && ! -e x.txt ]] || fail "a failed command left an output"
+
+# grid and bcc write meshes that info reads back with the expected numbers.
+expect_exit 0 "$TETCUT" grid --cells 4 4 4 -o cube.vtu
+expect_exit 0 "$TETCUT" info --json cube.vtu
+cp out.txt cube.json
+json_check cube.json 'j["tets"] == 320 and j["nodes"] == 125 and abs(j["volume"] - 1) < 1e-12'
+json_check cube.json 'j["boundary_faces"] == 192 and abs(j["min_dihedral_degrees"] - 54.7356) < 1e-3'
+expect_exit 0 "$TETCUT" grid --cells 2 3 4 --box -1 -1 -1 1 2 3 --tets-per-cube 6 -o six.msh --msh-version 22
+head -2 six.msh | grep -q "2.2 0 8" || fail "--msh-version 22 not honoured"
+expect_exit 0 "$TETCUT" info --json six.msh
+cp out.txt six.json
+json_check six.json 'j["tets"] == 144 and abs(j["volume"] - 24) < 1e-12 and j["bbox"]["min"] == [-1, -1, -1]'
+expect_exit 0 "$TETCUT" bcc --box 0 0 0 1 1 1 --spacing 0.25 -o bcc.mesh
+expect_exit 0 "$TETCUT" info --json bcc.mesh
+cp out.txt bcc.json
+json_check bcc.json 'j["tets"] == 12 * 64 and abs(j["volume"] - 1) < 1e-12'
+expect_exit 0 "$TETCUT" info bcc.mesh
+expect_stdout "dihedral angles"
+
+# convert between every pair of tet formats keeps the mesh.
+for ext in mesh msh node vtu vtk; do
+  expect_exit 0 "$TETCUT" convert cube.vtu "c.$ext"
+  expect_exit 0 "$TETCUT" info --json "c.$ext"
+  cp out.txt c.json
+  json_check c.json 'j["tets"] == 320 and j["nodes"] == 125 and abs(j["volume"] - 1) < 1e-12'
+done
+# A tet mesh converted to a surface format gives its closed boundary.
+expect_exit 0 "$TETCUT" convert cube.vtu skin.ply --binary
+expect_exit 0 "$TETCUT" info --json skin.ply
+cp out.txt skin.json
+json_check skin.json 'j["closed"] and j["triangles"] == 192 and abs(j["area"] - 6) < 1e-12 and abs(j["enclosed_volume"] - 1) < 1e-12'
+expect_exit 0 "$TETCUT" convert skin.ply skin.stl
+expect_exit 0 "$TETCUT" convert skin.stl skin.off
+expect_exit 0 "$TETCUT" info skin.off
+expect_stdout "closed           yes"
+
+# Bad input: message names file and line, exit 2, and the output is not created.
+printf 'MeshVersionFormatted 2\nDimension 3\nVertices\n2\n0 0 0 0\n1 nan 0 0\n' > bad.mesh
+expect_exit 2 "$TETCUT" convert bad.mesh out.vtu
+expect_stderr "bad.mesh:6:"
+expect_stderr "not a finite number"
+[[ ! -e out.vtu ]] || fail "convert left an output after failing"
+expect_exit 2 "$TETCUT" info missing.vtu
+expect_stderr "missing.vtu"
+expect_exit 2 "$TETCUT" info notes.txt
+expect_stderr "unknown file type"
+
+# The input is never overwritten, and a failed conversion keeps an existing output intact.
+cp cube.vtu keep.vtu
+before=$(md5sum keep.vtu)
+expect_exit 2 "$TETCUT" convert keep.vtu keep.vtu
+expect_stderr "overwrite the input"
+echo "old contents" > existing.vtu
+expect_exit 2 "$TETCUT" convert bad.mesh existing.vtu
+[[ $(cat existing.vtu) == "old contents" ]] || fail "a failed conversion changed the existing output"
+[[ $(md5sum keep.vtu) == "$before" ]] || fail "input changed"
+ls | grep -q '\.tmp' && fail "temporary files left behind"
+
+# A surface cannot become a tet mesh.
+expect_exit 2 "$TETCUT" convert skin.ply skin.vtu
+
+# The default job runs without input.
+expect_exit 0 "$TETCUT" demo -o demo
+[[ -s demo/cube.vtu && -s demo/bcc.vtu && -s demo/cube_boundary.obj ]] || fail "demo outputs missing"
+echo "cli_test: all checks passed"

@@ -1,0 +1,144 @@
+// Every writer's output reads back to the same mesh or surface, bit for bit.
+
+#include <tetcut/error.hpp>
+#include <tetcut/generators.hpp>
+#include <tetcut/io.hpp>
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "support/temp_dir.hpp"
+
+namespace tetcut {
+namespace {
+
+using testing::TempDir;
+
+// Coordinates like 0.1 * k are not exactly representable, so the text writers must print
+// enough digits to round-trip.
+TetMesh odd_mesh() { return make_bcc(Box{Vec3(-0.3, 0.1, 2.7), Vec3(1.9, 0.7, 3.3)}, 0.3); }
+
+class TetMeshRoundTrip : public ::testing::TestWithParam<std::tuple<std::string, int>> {};
+
+TEST_P(TetMeshRoundTrip, ReadsBackExactly) {
+  const auto [name, gmsh_version] = GetParam();
+  TempDir dir;
+  const TetMesh mesh = odd_mesh();
+  TetMeshWriteOptions options;
+  options.gmsh_version = gmsh_version;
+  write_tet_mesh(dir / name, mesh, options);
+  const TetMesh back = read_tet_mesh(dir / name);
+  ASSERT_EQ(back.num_nodes(), mesh.num_nodes());
+  ASSERT_EQ(back.num_tets(), mesh.num_tets());
+  EXPECT_EQ(back.rest(), mesh.rest());
+  EXPECT_EQ(back.tets(), mesh.tets());
+}
+
+INSTANTIATE_TEST_SUITE_P(Formats, TetMeshRoundTrip,
+                         ::testing::Values(std::make_tuple("m.mesh", 41), std::make_tuple("m.msh", 41),
+                                           std::make_tuple("m.msh", 22), std::make_tuple("m.node", 41),
+                                           std::make_tuple("m.ele", 41), std::make_tuple("m.vtu", 41),
+                                           std::make_tuple("m.vtk", 41)));
+
+TEST(TetMeshIo, TetgenWritesBothFiles) {
+  TempDir dir;
+  write_tet_mesh(dir / "out.node", odd_mesh());
+  EXPECT_TRUE(std::filesystem::exists(dir / "out.node"));
+  EXPECT_TRUE(std::filesystem::exists(dir / "out.ele"));
+}
+
+TEST(TetMeshIo, CurrentPositionsCanBeWritten) {
+  TempDir dir;
+  TetMesh mesh = odd_mesh();
+  Points moved = mesh.rest() * 2.0;
+  mesh.set_current(moved);
+  TetMeshWriteOptions options;
+  options.current_positions = true;
+  write_tet_mesh(dir / "moved.vtu", mesh, options);
+  EXPECT_EQ(read_tet_mesh(dir / "moved.vtu").rest(), moved);
+}
+
+TEST(TetMeshIo, FailedWriteLeavesExistingFileAndNoTemporaries) {
+  TempDir dir;
+  const auto target = dir.write("keep.vtu", "precious");
+  TetMeshWriteOptions options;
+  options.cell_fields.push_back({"bad", {1.0, 2.0}, false});  // wrong length
+  EXPECT_THROW(write_tet_mesh(target, odd_mesh(), options), Error);
+  std::ifstream in(target);
+  std::stringstream content;
+  content << in.rdbuf();
+  EXPECT_EQ(content.str(), "precious");
+  EXPECT_EQ(std::distance(std::filesystem::directory_iterator(dir.path()), std::filesystem::directory_iterator()), 1);
+}
+
+TEST(TetMeshIo, UnwritableDirectoryIsAnIoError) {
+  try {
+    write_tet_mesh("/nonexistent-dir/x.vtu", odd_mesh());
+    FAIL() << "expected an error";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.kind(), ErrorKind::kIo);
+    EXPECT_EQ(e.file(), "/nonexistent-dir/x.vtu");
+  }
+}
+
+TEST(TetMeshIo, UnknownExtension) {
+  TempDir dir;
+  EXPECT_THROW(write_tet_mesh(dir / "x.abc", odd_mesh()), Error);
+  EXPECT_THROW(read_tet_mesh(dir.write("x.abc", "")), Error);
+  EXPECT_EQ(file_kind("a.VTU"), FileKind::kTetMesh);
+  EXPECT_EQ(file_kind("a.Stl"), FileKind::kSurface);
+  EXPECT_EQ(file_kind("a.txt"), FileKind::kUnknown);
+}
+
+TriangleSurface odd_surface() {
+  // A closed octahedron with non-representable coordinates.
+  TriangleSurface s;
+  s.vertices.resize(6, 3);
+  s.vertices << 0.1, 0, 0, -0.1, 0, 0, 0, 0.3, 0, 0, -0.3, 0, 0, 0, 0.7, 0, 0, -0.7;
+  s.triangles.resize(8, 3);
+  s.triangles << 0, 2, 4, 2, 1, 4, 1, 3, 4, 3, 0, 4, 2, 0, 5, 1, 2, 5, 3, 1, 5, 0, 3, 5;
+  return s;
+}
+
+// Same triangles with the same corner coordinates; vertex numbering may differ (STL has none).
+void expect_same_corners(const TriangleSurface& actual, const TriangleSurface& expected) {
+  ASSERT_EQ(actual.num_triangles(), expected.num_triangles());
+  EXPECT_EQ(actual.num_vertices(), expected.num_vertices());
+  for (Index f = 0; f < expected.num_triangles(); ++f) {
+    for (int k = 0; k < 3; ++k) {
+      EXPECT_EQ(Vec3(actual.vertices.row(actual.triangles(f, k))), Vec3(expected.vertices.row(expected.triangles(f, k))));
+    }
+  }
+}
+
+class SurfaceRoundTrip : public ::testing::TestWithParam<std::tuple<std::string, bool>> {};
+
+TEST_P(SurfaceRoundTrip, ReadsBackExactly) {
+  const auto [name, binary] = GetParam();
+  TempDir dir;
+  const TriangleSurface s = odd_surface();
+  write_surface(dir / name, s, SurfaceWriteOptions{binary});
+  const TriangleSurface back = read_surface(dir / name);
+  expect_same_corners(back, s);
+}
+
+INSTANTIATE_TEST_SUITE_P(Formats, SurfaceRoundTrip,
+                         ::testing::Values(std::make_tuple("s.obj", false), std::make_tuple("s.off", false),
+                                           std::make_tuple("s.ply", false), std::make_tuple("s.ply", true),
+                                           std::make_tuple("s.stl", false)));
+
+TEST(SurfaceIo, BinaryStlKeepsSinglePrecisionCoordinatesAndWeldsCorners) {
+  TempDir dir;
+  TriangleSurface s = odd_surface();
+  // Binary STL stores floats: use coordinates that are exact in single precision.
+  s.vertices = (s.vertices * 8.0).array().round().matrix() / 8.0;
+  write_surface(dir / "s.stl", s, SurfaceWriteOptions{true});
+  // 24 stored corners are welded back to 6 vertices.
+  expect_same_corners(read_surface(dir / "s.stl"), s);
+}
+
+}  // namespace
+}  // namespace tetcut
