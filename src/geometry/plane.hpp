@@ -1,0 +1,84 @@
+#pragma once
+// Planes defined exactly by input doubles, and predicates on points defined as the meeting of three
+// such planes (TPI points). Topology is decided by these predicates only; no coordinate of an
+// implicit point is ever rounded while deciding.
+//
+// A plane is {x : n . x + d = 0}. Two definitions exist:
+//   - through three input points p, q, r: n = (q - p) x (r - p), d = -n . p (degree 2 and 3);
+//   - a wall through input points p, q and the coordinate axis e_k: n = (q - p) x e_k,
+//     d = -n . p (degree 1 and 2). Walls bound a cut triangle's prism: a point of the triangle's
+//     plane is inside the triangle iff it is inside its three walls.
+//
+// side(TPI(A, B, C), Q) = sign(det4[A; B; C; Q]) * sign(det3[nA; nB; nC]), where det4 is over the
+// rows (n, d). Each sign is computed with a filtered evaluation (geometry/approx.hpp) and, when that
+// cannot decide, exactly: all input doubles of the involved planes are scaled by one power of two
+// to integers, and the determinants are evaluated in GMP integers. Scaling all coordinates by s > 0
+// multiplies each determinant by a positive power of s, so the signs are unchanged.
+
+#include <tetcut/types.hpp>
+
+#include <array>
+#include <cstdint>
+
+#include "geometry/approx.hpp"
+
+namespace tetcut::geometry {
+
+class Plane {
+ public:
+  enum class Kind : std::uint8_t { kThroughPoints, kWall };
+
+  Plane() = default;
+  /// The plane through p, q, r, with normal (q - p) x (r - p). The points must not be collinear.
+  static Plane through(const Vec3& p, const Vec3& q, const Vec3& r);
+  /// The plane through p and q containing the direction of coordinate axis `axis`, with normal
+  /// (q - p) x e_axis. q - p must not be parallel to that axis.
+  static Plane wall(const Vec3& p, const Vec3& q, int axis);
+  /// The same plane with the opposite normal.
+  Plane flipped() const;
+
+  Kind kind() const { return kind_; }
+  int axis() const { return axis_; }
+  const std::array<Vec3, 3>& points() const { return points_; }
+  /// Coefficients (nx, ny, nz, d) with error bounds.
+  const std::array<Approx, 4>& approx() const { return approx_; }
+
+  /// Rounded coefficients, for output geometry only.
+  Eigen::Vector4d rounded() const;
+
+ private:
+  void compute_approx();
+
+  Kind kind_ = Kind::kThroughPoints;
+  std::int8_t axis_ = 0;
+  bool flipped_ = false;
+  std::array<Vec3, 3> points_{};
+  std::array<Approx, 4> approx_{};
+
+  friend struct ExactPlanes;
+};
+
+/// Sign of n . x + d for an input point x. Exact.
+int side_of_point(const Plane& plane, const Vec3& x);
+
+/// Sign of det3 of the three normals: non-zero iff the planes meet in exactly one point. Exact.
+int normal_determinant_sign(const Plane& a, const Plane& b, const Plane& c);
+
+/// Sign of det4 of the rows (n, d) of a, b, c, q. Exact.
+int plane_determinant_sign(const Plane& a, const Plane& b, const Plane& c, const Plane& q);
+
+/// Side of the point where a, b and c meet, relative to q. `orientation` must be
+/// normal_determinant_sign(a, b, c) (non-zero); callers cache it with the point.
+inline int side_of_tpi(const Plane& a, const Plane& b, const Plane& c, int orientation, const Plane& q) {
+  return plane_determinant_sign(a, b, c, q) * orientation;
+}
+
+/// True when p and q are the same set of points (either orientation). Exact.
+bool same_plane(const Plane& p, const Plane& q);
+/// +1 when same_plane and the normals point the same way, -1 when opposite, 0 when not the same plane.
+int plane_alignment(const Plane& p, const Plane& q);
+
+/// Rounded coordinates of the point where a, b and c meet (for output and volumes only).
+Vec3 tpi_coordinates(const Plane& a, const Plane& b, const Plane& c);
+
+}  // namespace tetcut::geometry

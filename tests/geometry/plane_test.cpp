@@ -1,0 +1,177 @@
+// Plane predicates: checked against an independent exact evaluation in rational arithmetic, on
+// random, nearly degenerate and exactly degenerate configurations.
+
+#include <gtest/gtest.h>
+
+#include <gmpxx.h>
+
+#include <cmath>
+#include <random>
+
+#include "geometry/plane.hpp"
+#include "geometry/predicates.hpp"
+
+namespace tetcut::geometry {
+namespace {
+
+using Q3 = std::array<mpq_class, 3>;
+
+// Reference: exact plane (n, d) over the rationals, from the definition.
+std::array<mpq_class, 4> reference_plane(const Plane& plane) {
+  const auto& pts = plane.points();
+  Q3 p, u;
+  for (int k = 0; k < 3; ++k) {
+    p[k] = pts[0][k];
+    u[k] = mpq_class(pts[1][k]) - p[k];
+  }
+  Q3 n;
+  if (plane.kind() == Plane::Kind::kThroughPoints) {
+    Q3 w;
+    for (int k = 0; k < 3; ++k) w[k] = mpq_class(pts[2][k]) - p[k];
+    n = {u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2], u[0] * w[1] - u[1] * w[0]};
+  } else {
+    Q3 e = {0, 0, 0};
+    e[plane.axis()] = 1;
+    n = {u[1] * e[2] - u[2] * e[1], u[2] * e[0] - u[0] * e[2], u[0] * e[1] - u[1] * e[0]};
+  }
+  // Orientation: a flipped plane has the opposite sign of its rounded approximation.
+  const mpq_class d = -(n[0] * p[0] + n[1] * p[1] + n[2] * p[2]);
+  std::array<mpq_class, 4> c = {n[0], n[1], n[2], d};
+  int largest = 0;
+  for (int k = 1; k < 3; ++k) {
+    if (std::abs(plane.approx()[k].value) > std::abs(plane.approx()[largest].value)) largest = k;
+  }
+  if ((plane.approx()[largest].value < 0) != (c[largest] < 0)) {
+    for (auto& v : c) v = -v;
+  }
+  return c;
+}
+
+// Reference: the exact point where three planes meet, and the side of q there.
+int reference_side(const Plane& a, const Plane& b, const Plane& c, const Plane& q) {
+  const auto pa = reference_plane(a), pb = reference_plane(b), pc = reference_plane(c), pq = reference_plane(q);
+  const auto det3 = [](const Q3& r0, const Q3& r1, const Q3& r2) -> mpq_class {
+    return r0[0] * (r1[1] * r2[2] - r1[2] * r2[1]) - r0[1] * (r1[0] * r2[2] - r1[2] * r2[0]) +
+           r0[2] * (r1[0] * r2[1] - r1[1] * r2[0]);
+  };
+  const Q3 n[3] = {{pa[0], pa[1], pa[2]}, {pb[0], pb[1], pb[2]}, {pc[0], pc[1], pc[2]}};
+  const Q3 rhs = {-pa[3], -pb[3], -pc[3]};
+  const mpq_class det = det3(n[0], n[1], n[2]);
+  mpq_class value = pq[3];
+  for (int k = 0; k < 3; ++k) {
+    Q3 m[3] = {n[0], n[1], n[2]};
+    for (int r = 0; r < 3; ++r) m[r][k] = rhs[r];
+    value += pq[k] * det3(m[0], m[1], m[2]) / det;
+  }
+  return sgn(value);
+}
+
+class PlaneTest : public ::testing::Test {
+ protected:
+  std::mt19937_64 rng{20261122};
+  Vec3 random_point(double scale = 1) {
+    std::uniform_real_distribution<double> coord(-scale, scale);
+    return {coord(rng), coord(rng), coord(rng)};
+  }
+  Plane random_plane() {
+    if (std::uniform_int_distribution<int>(0, 3)(rng) == 0) {
+      return Plane::wall(random_point(), random_point(), std::uniform_int_distribution<int>(0, 2)(rng));
+    }
+    return Plane::through(random_point(), random_point(), random_point());
+  }
+};
+
+TEST_F(PlaneTest, SideOfInputPointMatchesOrient3d) {
+  for (int trial = 0; trial < 5000; ++trial) {
+    const Vec3 p = random_point(), q = random_point(), r = random_point();
+    // x nearly on the plane, so the filter often cannot decide.
+    const Vec3 x = p + 0.3 * (q - p) + 0.9 * (r - p);
+    ASSERT_EQ(side_of_point(Plane::through(p, q, r), x), orient3d(p, q, r, x));
+  }
+}
+
+TEST_F(PlaneTest, WallSideIsTheProjectedOrientation) {
+  for (int trial = 0; trial < 2000; ++trial) {
+    const Vec3 p = random_point(), q = random_point(), x = random_point();
+    const int axis = trial % 3, u = (axis + 1) % 3, v = (axis + 2) % 3;
+    // n = (q - p) x e_axis, so n . (x - p) = orient2d of (p, q, x) projected onto (u, v), negated.
+    const double pp[2] = {p[u], p[v]}, qq[2] = {q[u], q[v]}, xx[2] = {x[u], x[v]};
+    ASSERT_EQ(side_of_point(Plane::wall(p, q, axis), x), -orient2d(pp, qq, xx));
+  }
+}
+
+TEST_F(PlaneTest, TpiSideMatchesRationalReference) {
+  int zeros = 0;
+  for (int trial = 0; trial < 3000; ++trial) {
+    const Plane a = random_plane(), b = random_plane(), c = random_plane();
+    const int orientation = normal_determinant_sign(a, b, c);
+    if (orientation == 0) continue;
+    Plane q;
+    switch (trial % 3) {
+      case 0:  // generic
+        q = random_plane();
+        break;
+      case 1: {  // through the rounded meeting point: the exact side is tiny, often zero
+        const Vec3 x = tpi_coordinates(a, b, c);
+        q = Plane::through(x, random_point(), random_point());
+        break;
+      }
+      default:  // one of the defining planes, flipped: exactly zero
+        q = b.flipped();
+        break;
+    }
+    const int side = side_of_tpi(a, b, c, orientation, q);
+    ASSERT_EQ(side, reference_side(a, b, c, q)) << "trial " << trial;
+    zeros += side == 0;
+  }
+  EXPECT_GT(zeros, 900);
+}
+
+TEST_F(PlaneTest, PlanesThroughACommonInputPointMeetThere) {
+  // Four planes through one input vertex: the fourth passes exactly through the meeting point of
+  // the other three, whatever rounding the coefficients suffer.
+  for (int trial = 0; trial < 1000; ++trial) {
+    const Vec3 o = random_point(1e3);
+    const Plane a = Plane::through(o, random_point(), random_point());
+    const Plane b = Plane::through(random_point(), o, random_point());
+    const Plane c = Plane::wall(o, random_point(), trial % 3);
+    const Plane q = Plane::through(random_point(), random_point(), o);
+    const int orientation = normal_determinant_sign(a, b, c);
+    if (orientation == 0) continue;
+    ASSERT_EQ(side_of_tpi(a, b, c, orientation, q), 0);
+  }
+}
+
+TEST_F(PlaneTest, SamePlaneFromDifferentDefinitions) {
+  const Vec3 p(0.1, 0.2, 0.3), q(0.7, 0.2, 0.3), r(0.1, 0.9, 0.3);
+  const Plane horizontal = Plane::through(p, q, r);
+  // Another triple of points of z = 0.3.
+  EXPECT_EQ(plane_alignment(horizontal, Plane::through(Vec3(5, 5, 0.3), Vec3(-3, 1, 0.3), Vec3(2, -7, 0.3))), 1);
+  EXPECT_EQ(plane_alignment(horizontal, Plane::through(Vec3(5, 5, 0.3), Vec3(2, -7, 0.3), Vec3(-3, 1, 0.3))), -1);
+  EXPECT_EQ(plane_alignment(horizontal, Plane::through(q, r, p)), 1);
+  EXPECT_EQ(plane_alignment(horizontal, horizontal.flipped()), -1);
+  // A wall through two points of z = 0.3 along z is not that plane, but along x it is.
+  EXPECT_EQ(plane_alignment(horizontal, Plane::wall(p, r, 2)), 0);
+  EXPECT_EQ(plane_alignment(horizontal, Plane::wall(p, r, 0)), -1);
+  // ...but the wall along z through (0.1, 0.2) and (0.7, 0.2) is the plane y = 0.2.
+  const Plane y_plane = Plane::through(Vec3(0, 0.2, 0), Vec3(0, 0.2, 1), Vec3(1, 0.2, 0));
+  EXPECT_NE(plane_alignment(y_plane, Plane::wall(p, q, 2)), 0);
+  EXPECT_NE(plane_alignment(Plane::wall(p, q, 2), y_plane), 0);
+  EXPECT_FALSE(same_plane(y_plane, horizontal));
+}
+
+TEST_F(PlaneTest, TinyAndHugeCoordinatesFallBackToExact) {
+  for (const double scale : {std::ldexp(1.0, -680), std::ldexp(1.0, 680)}) {
+    // Powers of two scale exactly; the products of the scaled coordinates underflow or overflow.
+    const Vec3 p0(1, 2, 3), q0(4, -1, 2), r0(0, 5, -2);
+    const Plane plane = Plane::through(p0 * scale, q0 * scale, r0 * scale);
+    EXPECT_EQ(side_of_point(plane, p0 * scale), 0);
+    EXPECT_EQ(side_of_point(plane, (q0 + 0.25 * (r0 - q0)) * scale), 0);
+    const Vec3 normal = (q0 - p0).cross(r0 - p0);
+    EXPECT_EQ(side_of_point(plane, (p0 + normal * 1e-3) * scale), 1);
+    EXPECT_EQ(side_of_point(plane, (p0 - normal * 1e-3) * scale), -1);
+  }
+}
+
+}  // namespace
+}  // namespace tetcut::geometry
