@@ -209,17 +209,22 @@ int plane_determinant_sign(const Plane& a, const Plane& b, const Plane& c, const
                       ExactPlanes::coefficients(c, scaled), ExactPlanes::coefficients(q, scaled)));
 }
 
+int normal_component_sign(const Plane& plane, int axis) {
+  const int s = certain_sign(plane.approx()[axis]);
+  if (s != 2) return s;
+  ScaledInputs scaled;
+  scaled.include(plane);
+  return sign_of(ExactPlanes::coefficients(plane, scaled)[axis]);
+}
+
 int plane_alignment(const Plane& p, const Plane& q) {
   // q's defining points lie on p, or (for a wall) its two points and the axis direction do.
   const auto& pts = q.points();
   if (side_of_point(p, pts[0]) != 0 || side_of_point(p, pts[1]) != 0) return 0;
   if (q.kind() == Plane::Kind::kThroughPoints) {
     if (side_of_point(p, pts[2]) != 0) return 0;
-  } else if (certain_sign(p.approx()[q.axis()]) != 0) {
-    // The wall contains direction e_axis, so p must too: its normal's axis component is zero.
-    ScaledInputs scaled;
-    scaled.include(p);
-    if (sign_of(ExactPlanes::coefficients(p, scaled)[q.axis()]) != 0) return 0;
+  } else if (normal_component_sign(p, q.axis()) != 0) {
+    return 0;  // the wall contains direction e_axis, so p must too
   }
   // Same plane: compare normal directions on the largest component of p's normal.
   ScaledInputs scaled;

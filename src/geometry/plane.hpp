@@ -73,6 +73,9 @@ inline int side_of_tpi(const Plane& a, const Plane& b, const Plane& c, int orien
   return plane_determinant_sign(a, b, c, q) * orientation;
 }
 
+/// Sign of component `axis` of the plane's normal. Exact.
+int normal_component_sign(const Plane& plane, int axis);
+
 /// True when p and q are the same set of points (either orientation). Exact.
 bool same_plane(const Plane& p, const Plane& q);
 /// +1 when same_plane and the normals point the same way, -1 when opposite, 0 when not the same plane.
