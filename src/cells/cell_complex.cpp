@@ -1,89 +1,208 @@
 #include "cells/cell_complex.hpp"
 
-#include <tetcut/tet_mesh.hpp>
-
 #include <algorithm>
 #include <cmath>
-#include <numeric>
 #include <stdexcept>
 
 namespace tetcut::cells {
 
 using geometry::Plane;
+using registry::OrientedPlane;
 
-CellComplex::CellComplex(const std::array<Vec3, 4>& corners) {
-  PlaneId face_plane[4];
-  for (int f = 0; f < 4; ++f) {
-    const auto& local = kTetFaces[f];
-    // Outward normals; distinct planes for a tet with volume, so no two merge.
-    face_plane[f] = add_plane(Plane::through(corners[local[0]], corners[local[1]], corners[local[2]])).id;
+namespace {
+
+[[noreturn]] void broken(const char* what) { throw std::logic_error(std::string("cell complex: ") + what); }
+
+// Local index (0-3) of `node` in tet row `tet`, or -1.
+int local_index(const Tets& tets, Index tet, Index node) {
+  for (int k = 0; k < 4; ++k) {
+    if (tets(tet, k) == node) return k;
   }
-  // Corner i is on every face but face i.
-  for (int i = 0; i < 4; ++i) {
-    PlaneId on[3];
-    for (int f = 0, m = 0; f < 4; ++f) {
-      if (f != i) on[m++] = face_plane[f];
+  return -1;
+}
+
+}  // namespace
+
+CellComplex::CellComplex(const TetMesh& mesh, registry::IntersectionRegistry& registry)
+    : mesh_(&mesh),
+      registry_(&registry),
+      first_cell_(static_cast<std::size_t>(mesh.num_tets()), -1),
+      tet_material_(static_cast<std::size_t>(mesh.num_tets()), 1),
+      face_first_facet_(static_cast<std::size_t>(mesh.adjacency().num_faces()), -1),
+      face_plane_(static_cast<std::size_t>(mesh.adjacency().num_faces()), -1),
+      mesh_edge_first_(static_cast<std::size_t>(mesh.adjacency().num_edges()), -1),
+      node_vertex_(static_cast<std::size_t>(mesh.num_nodes()), -1),
+      tet_touch_stamp_(static_cast<std::size_t>(mesh.num_tets()), -1) {}
+
+Index CellComplex::tet_of(Side s) const {
+  if (is_cell(s)) return cells_[s].tet;
+  if (is_unrefined(s)) return unrefined_tet(s);
+  return -1;
+}
+
+bool CellComplex::side_is_material(Side s) const {
+  if (is_cell(s)) return cells_[s].material;
+  if (is_unrefined(s)) return tet_material(unrefined_tet(s));
+  return false;
+}
+
+void CellComplex::set_tet_material(Index tet, bool material) {
+  tet_material_[tet] = material ? 1 : 0;
+  for (CellId c = first_cell_[tet]; c >= 0; c = cells_[c].next_in_tet) cells_[c].material = material;
+}
+
+// ---- Lazy refinement ---------------------------------------------------------------------------
+
+PlaneId CellComplex::face_plane(Index face) {
+  if (face_plane_[face] < 0) {
+    // Faces are stored with ascending node ids; the plane through them in that order fixes the
+    // orientation of every facet on the face.
+    const auto& faces = mesh_->adjacency().faces;
+    const Points& p = mesh_->rest();
+    face_plane_[face] = registry_->add_plane(Plane::through(p.row(faces(face, 0)).transpose(),
+                                                            p.row(faces(face, 1)).transpose(),
+                                                            p.row(faces(face, 2)).transpose()));
+  }
+  return face_plane_[face];
+}
+
+VertexId CellComplex::node_vertex(Index node, Index tet) {
+  if (node_vertex_[node] < 0) {
+    // A mesh node is the meeting of the three faces of `tet` through it.
+    const int i = local_index(mesh_->tets(), tet, node);
+    PlaneId planes[3];
+    for (int k = 0, m = 0; k < 4; ++k) {
+      if (k != i) planes[m++] = face_plane(mesh_->adjacency().tet_faces(tet, k));
     }
-    add_vertex(on[0], on[1], on[2]);
+    node_vertex_[node] = registry_->add_node(node, planes[0], planes[1], planes[2]);
   }
-  cells_.push_back(Cell{});
-  for (int f = 0; f < 4; ++f) {
-    Facet facet;
-    facet.plane = face_plane[f];
-    facet.back = 0;  // outward normal: the tet is behind its faces
-    facet.tet_face = static_cast<std::int8_t>(f);
-    for (int k = 0; k < 3; ++k) {
-      const int a = kTetFaces[f][k], b = kTetFaces[f][(k + 1) % 3];
-      facet.vertices.push_back(a);
-      // The other face through corners a and b is the one opposite the fourth corner.
-      facet.edge_planes.push_back(face_plane[6 - f - a - b]);
+  return node_vertex_[node];
+}
+
+EdgeId CellComplex::add_edge(VertexId a, VertexId b, std::array<PlaneId, 2> line, Index mesh_edge) {
+  Edge edge;
+  edge.a = a;
+  edge.b = b;
+  edge.line = line;
+  edge.mesh_edge = mesh_edge;
+  const EdgeId id = static_cast<EdgeId>(edges_.size());
+  if (mesh_edge >= 0) {
+    edge.next_on_mesh_edge = mesh_edge_first_[mesh_edge];
+    mesh_edge_first_[mesh_edge] = id;
+  }
+  edges_.push_back(std::move(edge));
+  return id;
+}
+
+void CellComplex::append_mesh_edge_chain(Index mesh_edge, Index from, Index to, Index tet, FacetId facet,
+                                         std::vector<Corner>* corners) {
+  const VertexId start = node_vertex(from, tet);
+  const VertexId target = node_vertex(to, tet);
+  if (mesh_edge_first_[mesh_edge] < 0) {
+    // The two faces of `tet` through the edge are those opposite its two other nodes.
+    PlaneId line[2];
+    for (int k = 0, m = 0; k < 4; ++k) {
+      const Index node = mesh_->tets()(tet, k);
+      if (node != from && node != to) line[m++] = face_plane(mesh_->adjacency().tet_faces(tet, k));
     }
-    facets_.push_back(facet);
-    cells_[0].facets.push_back(f);
-    index_edges(f);
+    add_edge(start, target, {line[0], line[1]}, mesh_edge);
+  }
+  // The edge records on a mesh edge form a path between its nodes; walk it from `from`.
+  VertexId previous = -1, current = start;
+  while (current != target) {
+    EdgeId next = -1;
+    for (EdgeId e = mesh_edge_first_[mesh_edge]; e >= 0; e = edges_[e].next_on_mesh_edge) {
+      const Edge& edge = edges_[e];
+      const VertexId other = edge.a == current ? edge.b : (edge.b == current ? edge.a : -1);
+      if (other >= 0 && other != previous) {
+        next = e;
+        break;
+      }
+    }
+    if (next < 0) broken("the edge records on a mesh edge do not form a path");
+    corners->push_back({current, next});
+    edges_[next].facets.push_back(facet);
+    previous = current;
+    current = edges_[next].a == current ? edges_[next].b : edges_[next].a;
   }
 }
 
-CellComplex::OrientedPlane CellComplex::add_plane(const Plane& plane) {
-  for (PlaneId id = 0; id < static_cast<PlaneId>(planes_.size()); ++id) {
-    const int alignment = geometry::plane_alignment(planes_[id], plane);
-    if (alignment != 0) return {id, alignment};
+void CellComplex::add_face_facet(Index face, Index tet, CellId cell) {
+  const TetAdjacency& adj = mesh_->adjacency();
+  const Tets& tets = mesh_->tets();
+  const PlaneId plane = face_plane(face);
+  int local_face = 0;
+  while (adj.tet_faces(tet, local_face) != face) ++local_face;
+  // Face k of a tet is opposite its local node k: that node tells which side the tet is on.
+  const int tet_side = geometry::side_of_point(registry_->plane(plane), mesh_->rest().row(tets(tet, local_face)).transpose());
+  Side other = kOutside;
+  for (const Index t : adj.tets_of_face(face)) {
+    if (t != tet) other = unrefined_side(t);
   }
-  planes_.push_back(plane);
-  return {static_cast<PlaneId>(planes_.size() - 1), 1};
+  Facet facet;
+  facet.plane = plane;
+  facet.mesh_face = face;
+  facet.front = tet_side > 0 ? cell : other;
+  facet.back = tet_side > 0 ? other : cell;
+  const FacetId id = static_cast<FacetId>(facets_.size());
+  facets_.push_back(std::move(facet));
+
+  // The cycle n0 -> n1 -> n2 (ascending ids) is counter-clockwise seen from the plane's front.
+  const Index n[3] = {adj.faces(face, 0), adj.faces(face, 1), adj.faces(face, 2)};
+  std::vector<Corner> corners;
+  for (int k = 0; k < 3; ++k) {
+    const Index from = n[k], to = n[(k + 1) % 3];
+    Index mesh_edge = -1;
+    for (int e = 0; e < 6; ++e) {
+      const Index a = tets(tet, kTetEdges[e][0]), b = tets(tet, kTetEdges[e][1]);
+      if ((a == from && b == to) || (a == to && b == from)) mesh_edge = adj.tet_edges(tet, e);
+    }
+    append_mesh_edge_chain(mesh_edge, from, to, tet, id, &corners);
+  }
+  facets_[id].corners = std::move(corners);
+  facets_[id].next_on_mesh_face = face_first_facet_[face];
+  face_first_facet_[face] = id;
+  cells_[cell].facets.push_back(id);
 }
 
-VertexId CellComplex::add_vertex(PlaneId a, PlaneId b, PlaneId c) {
-  const int orientation = geometry::normal_determinant_sign(planes_[a], planes_[b], planes_[c]);
-  if (orientation == 0) throw std::logic_error("cell complex: a vertex's three planes do not meet in one point");
-  vertices_.push_back(Vertex{{a, b, c}, static_cast<std::int8_t>(orientation)});
-  return static_cast<VertexId>(vertices_.size() - 1);
+CellId CellComplex::refine(Index tet) {
+  if (first_cell_[tet] >= 0) return first_cell_[tet];
+  const CellId cell = static_cast<CellId>(cells_.size());
+  Cell c;
+  c.tet = tet;
+  c.material = tet_material_[tet] != 0;
+  cells_.push_back(std::move(c));
+  first_cell_[tet] = cell;
+  const Side marker = unrefined_side(tet);
+  for (int k = 0; k < 4; ++k) {
+    const Index face = mesh_->adjacency().tet_faces(tet, k);
+    if (face_first_facet_[face] < 0) {
+      add_face_facet(face, tet, cell);
+      continue;
+    }
+    // A refined neighbour already made this face's facets; they refer to this tet by its marker.
+    for (FacetId f = face_first_facet_[face]; f >= 0; f = facets_[f].next_on_mesh_face) {
+      Facet& facet = facets_[f];
+      if (facet.front == marker) {
+        facet.front = cell;
+      } else if (facet.back == marker) {
+        facet.back = cell;
+      } else {
+        broken("a facet on a face of an unrefined tet does not refer to it");
+      }
+      cells_[cell].facets.push_back(f);
+    }
+  }
+  return cell;
 }
 
-int CellComplex::side(VertexId v, PlaneId plane) const {
-  std::vector<std::int8_t>* memo = nullptr;
-  for (auto& [id, values] : side_memo_) {
-    if (id == plane) memo = &values;
-  }
-  if (memo != nullptr) {
-    if (memo->size() <= static_cast<std::size_t>(v)) memo->resize(vertices_.size(), 2);
-    if ((*memo)[v] != 2) return (*memo)[v];
-  }
-  const Vertex& vertex = vertices_[v];
-  int s = 0;
-  if (vertex.planes[0] != plane && vertex.planes[1] != plane && vertex.planes[2] != plane) {
-    s = geometry::side_of_tpi(planes_[vertex.planes[0]], planes_[vertex.planes[1]], planes_[vertex.planes[2]],
-                              vertex.orientation, planes_[plane]);
-  }
-  if (memo != nullptr) (*memo)[v] = static_cast<std::int8_t>(s);
-  return s;
-}
+// ---- Predicates on cells and facets ------------------------------------------------------------
 
 int CellComplex::classify(CellId cell, PlaneId plane) const {
   bool positive = false, negative = false;
   for (const FacetId f : cells_[cell].facets) {
-    for (const VertexId v : facets_[f].vertices) {
-      const int s = side(v, plane);
+    for (const Corner& corner : facets_[f].corners) {
+      const int s = registry_->side(corner.vertex, plane);
       positive = positive || s > 0;
       negative = negative || s < 0;
       if (positive && negative) return 0;
@@ -94,151 +213,213 @@ int CellComplex::classify(CellId cell, PlaneId plane) const {
   return 2;
 }
 
-void CellComplex::index_edges(FacetId f) {
-  const auto& vs = facets_[f].vertices;
-  for (std::size_t i = 0; i < vs.size(); ++i) facets_of_edge_[edge_key(vs[i], vs[(i + 1) % vs.size()])].push_back(f);
-}
-
-void CellComplex::unindex_edges(FacetId f) {
-  const auto& vs = facets_[f].vertices;
-  for (std::size_t i = 0; i < vs.size(); ++i) {
-    auto it = facets_of_edge_.find(edge_key(vs[i], vs[(i + 1) % vs.size()]));
-    if (it == facets_of_edge_.end()) continue;
-    auto& list = it->second;
-    list.erase(std::remove(list.begin(), list.end(), f), list.end());
-    if (list.empty()) facets_of_edge_.erase(it);
+bool CellComplex::facet_on_plane(FacetId facet, PlaneId plane) const {
+  if (facets_[facet].plane == plane) return true;
+  for (const Corner& corner : facets_[facet].corners) {
+    if (registry_->side(corner.vertex, plane) != 0) return false;
   }
+  return true;
 }
 
-void CellComplex::insert_on_edge(VertexId u, VertexId v, VertexId w) {
-  const auto it = facets_of_edge_.find(edge_key(u, v));
-  if (it == facets_of_edge_.end()) return;
-  const std::vector<FacetId> owners = it->second;
-  facets_of_edge_.erase(it);
-  for (const FacetId f : owners) {
-    Facet& facet = facets_[f];
-    const std::size_t n = facet.vertices.size();
-    for (std::size_t i = 0; i < n; ++i) {
-      const VertexId a = facet.vertices[i], b = facet.vertices[(i + 1) % n];
-      if ((a == u && b == v) || (a == v && b == u)) {
-        facet.vertices.insert(facet.vertices.begin() + static_cast<std::ptrdiff_t>(i + 1), w);
-        facet.edge_planes.insert(facet.edge_planes.begin() + static_cast<std::ptrdiff_t>(i + 1), facet.edge_planes[i]);
+bool CellComplex::facet_outside_walls(FacetId facet) const {
+  for (const OrientedPlane& wall : insertion_.walls) {
+    bool outside = true;
+    for (const Corner& corner : facets_[facet].corners) {
+      if (registry_->side(corner.vertex, wall.id) * wall.sign > 0) {
+        outside = false;
         break;
       }
     }
-    facets_of_edge_[edge_key(u, w)].push_back(f);
-    facets_of_edge_[edge_key(w, v)].push_back(f);
+    if (outside) return true;
   }
+  return false;
+}
+
+bool CellComplex::tet_may_be_cut(Index tet) const {
+  const Points& p = mesh_->rest();
+  Vec3 corners[4];
+  for (int k = 0; k < 4; ++k) corners[k] = p.row(mesh_->tets()(tet, k)).transpose();
+  int positive = 0, negative = 0;
+  for (const Vec3& x : corners) {
+    const int s = geometry::side_of_point(registry_->plane(insertion_.plane.id), x);
+    positive += s > 0;
+    negative += s < 0;
+  }
+  // Off the plane, or touching it in less than a face: the triangle covers nothing here.
+  if ((positive == 0 || negative == 0) && positive + negative > 1) return false;
+  for (const OrientedPlane& wall : insertion_.walls) {
+    bool outside = true;
+    for (const Vec3& x : corners) outside = outside && geometry::side_of_point(registry_->plane(wall.id), x) * wall.sign <= 0;
+    if (outside) return false;
+  }
+  return true;
+}
+
+// ---- Splitting ---------------------------------------------------------------------------------
+
+void CellComplex::touch(Index tet) {
+  if (tet_touch_stamp_[tet] == insertion_.stamp) return;
+  tet_touch_stamp_[tet] = insertion_.stamp;
+  if (insertion_.touched != nullptr) insertion_.touched->push_back(tet);
+}
+
+void CellComplex::touch_side(Side s) {
+  const Index tet = tet_of(s);
+  if (tet >= 0) touch(tet);
+}
+
+void CellComplex::insert_on_edge(EdgeId e, VertexId w) {
+  const VertexId a = edges_[e].a, b = edges_[e].b;
+  const EdgeId second = add_edge(w, b, edges_[e].line, edges_[e].mesh_edge);
+  edges_[e].b = w;
+  edges_[second].facets = edges_[e].facets;
+  for (const FacetId f : edges_[e].facets) {
+    auto& corners = facets_[f].corners;
+    std::size_t i = 0;
+    while (i < corners.size() && corners[i].edge != e) ++i;
+    if (i == corners.size()) broken("an edge lists a facet that does not use it");
+    if (corners[i].vertex == a) {
+      corners.insert(corners.begin() + static_cast<std::ptrdiff_t>(i + 1), Corner{w, second});
+    } else {
+      // The facet runs b -> a along this edge: b -> w is now the second record, w -> a the first.
+      corners[i].edge = second;
+      corners.insert(corners.begin() + static_cast<std::ptrdiff_t>(i + 1), Corner{w, e});
+    }
+    touch_side(facets_[f].front);
+    touch_side(facets_[f].back);
+  }
+}
+
+FacetId CellComplex::split_facet(FacetId f, PlaneId plane, CellId cell, CellId negative_cell) {
+  const std::vector<Corner> corners = facets_[f].corners;
+  const std::size_t n = corners.size();
+  // A convex polygon crossed by a line meets it in exactly two boundary points, both vertices by
+  // now: `rise` is followed by the positive run, `fall` by the negative run.
+  std::size_t rise = n, fall = n;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (registry_->side(corners[i].vertex, plane) != 0) continue;
+    const int next = registry_->side(corners[(i + 1) % n].vertex, plane);
+    if (next > 0) rise = (rise == n) ? i : n + 1;
+    if (next < 0) fall = (fall == n) ? i : n + 1;
+  }
+  if (rise >= n || fall >= n) broken("a crossing facet does not meet the plane in exactly two vertices");
+  const VertexId a = corners[rise].vertex, b = corners[fall].vertex;
+  const EdgeId chord = add_edge(a, b, {facets_[f].plane, plane}, -1);
+
+  std::vector<Corner> positive, negative;
+  for (std::size_t i = rise; i != fall; i = (i + 1) % n) positive.push_back(corners[i]);
+  positive.push_back({b, chord});
+  for (std::size_t i = fall; i != rise; i = (i + 1) % n) negative.push_back(corners[i]);
+  negative.push_back({a, chord});
+
+  const FacetId g = static_cast<FacetId>(facets_.size());
+  Facet part = facets_[f];
+  part.corners = std::move(negative);
+  if (part.front == cell) part.front = negative_cell;
+  if (part.back == cell) part.back = negative_cell;
+  part.next_on_mesh_face = -1;
+  for (std::size_t k = 0; k + 1 < part.corners.size(); ++k) {
+    auto& list = edges_[part.corners[k].edge].facets;
+    std::replace(list.begin(), list.end(), f, g);
+  }
+  edges_[chord].facets = {f, g};
+  const Side other = facets_[f].front == cell ? facets_[f].back : facets_[f].front;
+  facets_.push_back(std::move(part));
+  facets_[f].corners = std::move(positive);
+  if (facets_[g].mesh_face >= 0) {
+    facets_[g].next_on_mesh_face = face_first_facet_[facets_[g].mesh_face];
+    face_first_facet_[facets_[g].mesh_face] = g;
+  }
+  if (is_cell(other)) cells_[other].facets.push_back(g);
+  touch_side(other);
+  return g;
 }
 
 CellId CellComplex::split(CellId cell, PlaneId plane, FacetId* section) {
   if (classify(cell, plane) != 0) return -1;
-  const CellId negative_cell = static_cast<CellId>(cells_.size());
-  cells_.push_back(Cell{});
-
-  // 1. Put a vertex on every edge of the cell that crosses the plane, in every facet sharing it.
   const std::vector<FacetId> old_facets = cells_[cell].facets;
+
+  // 1. A vertex on every edge of the cell that crosses the plane, in every facet around that edge.
   for (const FacetId f : old_facets) {
-    for (std::size_t i = 0; i < facets_[f].vertices.size(); ++i) {
-      const std::size_t n = facets_[f].vertices.size();
-      const VertexId u = facets_[f].vertices[i], v = facets_[f].vertices[(i + 1) % n];
-      if (side(u, plane) * side(v, plane) < 0) {
-        const VertexId w = add_vertex(facets_[f].plane, facets_[f].edge_planes[i], plane);
-        insert_on_edge(u, v, w);
+    for (std::size_t i = 0; i < facets_[f].corners.size(); ++i) {
+      const std::size_t n = facets_[f].corners.size();
+      const Corner corner = facets_[f].corners[i];
+      const VertexId next = facets_[f].corners[(i + 1) % n].vertex;
+      if (registry_->side(corner.vertex, plane) * registry_->side(next, plane) < 0) {
+        const Edge& edge = edges_[corner.edge];
+        insert_on_edge(corner.edge, registry_->add_point(edge.line[0], edge.line[1], plane));
       }
     }
   }
 
-  // 2. Distribute the facets, splitting those that cross. Collect the section's edges, directed as
-  //    the section's counter-clockwise cycle (seen from the positive side) runs.
-  struct SectionEdge {
+  // 2. The negative part, linked after the cell in its tet's list.
+  const CellId negative_cell = static_cast<CellId>(cells_.size());
+  {
+    Cell part;
+    part.tet = cells_[cell].tet;
+    part.material = cells_[cell].material;
+    part.next_in_tet = cells_[cell].next_in_tet;
+    cells_.push_back(std::move(part));
+    cells_[cell].next_in_tet = negative_cell;
+  }
+  touch(cells_[cell].tet);
+
+  // 3. Distribute the facets, splitting those that cross. Collect the section's edges, directed
+  //    as the positive cell's outward facets run along them (that is the section's own
+  //    counter-clockwise order seen from the positive side, where its normal points).
+  struct Directed {
     VertexId from, to;
-    PlaneId plane;
+    EdgeId edge;
   };
-  std::vector<SectionEdge> section_edges;
+  std::vector<Directed> section_edges;
   std::vector<FacetId> positive_facets, negative_facets;
   for (const FacetId f : old_facets) {
     const bool cell_is_back = facets_[f].back == cell;
-    const std::vector<VertexId> vs = facets_[f].vertices;
-    const std::vector<PlaneId> es = facets_[f].edge_planes;
-    const std::size_t n = vs.size();
     bool positive = false, negative = false;
-    for (const VertexId v : vs) {
-      positive = positive || side(v, plane) > 0;
-      negative = negative || side(v, plane) < 0;
+    for (const Corner& corner : facets_[f].corners) {
+      const int s = registry_->side(corner.vertex, plane);
+      positive = positive || s > 0;
+      negative = negative || s < 0;
     }
-    // Outward direction of edge i for the cell: the stored direction when the cell is behind.
-    auto add_on_plane_edges = [&](bool reverse) {
-      for (std::size_t i = 0; i < n; ++i) {
-        const VertexId a = vs[i], b = vs[(i + 1) % n];
-        if (side(a, plane) != 0 || side(b, plane) != 0) continue;
-        const bool outward_is_stored = cell_is_back;
-        VertexId from = outward_is_stored ? a : b, to = outward_is_stored ? b : a;
-        if (reverse) std::swap(from, to);
-        section_edges.push_back({from, to, facets_[f].plane});
-      }
-    };
-    if (!negative) {
+    if (positive && negative) {
+      negative_facets.push_back(split_facet(f, plane, cell, negative_cell));
       positive_facets.push_back(f);
-      add_on_plane_edges(false);
+      // The chord closes the positive part: stored from its last corner to its first.
+      const auto& corners = facets_[f].corners;
+      const VertexId last = corners.back().vertex, first = corners.front().vertex;
+      section_edges.push_back(cell_is_back ? Directed{last, first, corners.back().edge}
+                                           : Directed{first, last, corners.back().edge});
       continue;
     }
-    if (!positive) {
-      (cell_is_back ? facets_[f].back : facets_[f].front) = negative_cell;
+    if (negative) {
+      Facet& facet = facets_[f];
+      (cell_is_back ? facet.back : facet.front) = negative_cell;
       negative_facets.push_back(f);
-      add_on_plane_edges(true);
-      continue;
+    } else {
+      positive_facets.push_back(f);
     }
-    // Crossing facet: keep the >= 0 arc in f, move the <= 0 arc to a new facet; each arc is closed
-    // by a chord on the plane.
-    auto arc = [&](int sign, std::vector<VertexId>& out_vs, std::vector<PlaneId>& out_es, VertexId* chord_from,
-                   VertexId* chord_to) {
-      for (std::size_t i = 0; i < n; ++i) {
-        if (side(vs[i], plane) * sign < 0) continue;
-        out_vs.push_back(vs[i]);
-        const VertexId next = vs[(i + 1) % n];
-        if (side(next, plane) * sign >= 0) {
-          out_es.push_back(es[i]);
-        } else {
-          out_es.push_back(plane);
-          *chord_from = vs[i];
-        }
-      }
-      // The chord ends at the first kept vertex after the skipped run.
-      for (std::size_t i = 0; i < out_vs.size(); ++i) {
-        if (out_es[i] == plane && side(out_vs[i], plane) == 0 && out_vs[i] == *chord_from) {
-          *chord_to = out_vs[(i + 1) % out_vs.size()];
-        }
-      }
-    };
-    std::vector<VertexId> pos_vs, neg_vs;
-    std::vector<PlaneId> pos_es, neg_es;
-    VertexId pos_from = -1, pos_to = -1, neg_from = -1, neg_to = -1;
-    arc(+1, pos_vs, pos_es, &pos_from, &pos_to);
-    arc(-1, neg_vs, neg_es, &neg_from, &neg_to);
-    unindex_edges(f);
-    Facet negative_part = facets_[f];
-    negative_part.vertices = std::move(neg_vs);
-    negative_part.edge_planes = std::move(neg_es);
-    (cell_is_back ? negative_part.back : negative_part.front) = negative_cell;
-    facets_[f].vertices = std::move(pos_vs);
-    facets_[f].edge_planes = std::move(pos_es);
-    const FacetId g = static_cast<FacetId>(facets_.size());
-    const CellId other = cell_is_back ? negative_part.front : negative_part.back;
-    facets_.push_back(std::move(negative_part));
-    index_edges(f);
-    index_edges(g);
-    if (other != kOutside) cells_[other].facets.push_back(g);
-    positive_facets.push_back(f);
-    negative_facets.push_back(g);
-    // The chord in the positive part, in the cell's outward direction.
-    section_edges.push_back(cell_is_back ? SectionEdge{pos_from, pos_to, facets_[f].plane}
-                                         : SectionEdge{pos_to, pos_from, facets_[f].plane});
+    // Edges on the plane: the positive cell runs them in its outward direction; for a negative
+    // facet that is the reverse of the negative cell's outward direction.
+    const auto& corners = facets_[f].corners;
+    const std::size_t n = corners.size();
+    for (std::size_t i = 0; i < n; ++i) {
+      const VertexId u = corners[i].vertex, v = corners[(i + 1) % n].vertex;
+      if (registry_->side(u, plane) != 0 || registry_->side(v, plane) != 0) continue;
+      const bool stored_direction = cell_is_back != negative;
+      section_edges.push_back(stored_direction ? Directed{u, v, corners[i].edge} : Directed{v, u, corners[i].edge});
+    }
   }
 
-  // 3. Chain the section's edges into its cycle. Each edge was seen from both sides; keep one copy.
-  std::unordered_map<VertexId, std::pair<VertexId, PlaneId>> next;
-  for (const SectionEdge& e : section_edges) next[e.from] = {e.to, e.plane};
+  // 4. Chain the section's edges into its cycle. Edges on the plane were seen from both of their
+  //    facets, in the same direction; keep one copy.
+  std::sort(section_edges.begin(), section_edges.end(),
+            [](const Directed& x, const Directed& y) { return x.from < y.from || (x.from == y.from && x.edge < y.edge); });
+  section_edges.erase(std::unique(section_edges.begin(), section_edges.end(),
+                                  [](const Directed& x, const Directed& y) { return x.from == y.from && x.edge == y.edge; }),
+                      section_edges.end());
+  for (std::size_t i = 1; i < section_edges.size(); ++i) {
+    if (section_edges[i].from == section_edges[i - 1].from) broken("the section of a split cell branches");
+  }
   Facet cap;
   cap.plane = plane;
   cap.front = cell;
@@ -246,20 +427,20 @@ CellId CellComplex::split(CellId cell, PlaneId plane, FacetId* section) {
   const VertexId start = section_edges.front().from;
   VertexId v = start;
   do {
-    const auto it = next.find(v);
-    if (it == next.end() || cap.vertices.size() > next.size()) {
-      throw std::logic_error("cell complex: the section of a split cell is not one closed polygon");
+    const auto it = std::lower_bound(section_edges.begin(), section_edges.end(), v,
+                                     [](const Directed& x, VertexId key) { return x.from < key; });
+    if (it == section_edges.end() || it->from != v || cap.corners.size() >= section_edges.size()) {
+      broken("the section of a split cell is not one closed polygon");
     }
-    cap.vertices.push_back(v);
-    cap.edge_planes.push_back(it->second.second);
-    v = it->second.first;
+    cap.corners.push_back({v, it->edge});
+    v = it->to;
   } while (v != start);
-  if (cap.vertices.size() != next.size()) {
-    throw std::logic_error("cell complex: the section of a split cell is not one closed polygon");
+  if (cap.corners.size() != section_edges.size() || cap.corners.size() < 3) {
+    broken("the section of a split cell is not one closed polygon");
   }
   const FacetId cap_id = static_cast<FacetId>(facets_.size());
+  for (const Corner& corner : cap.corners) edges_[corner.edge].facets.push_back(cap_id);
   facets_.push_back(std::move(cap));
-  index_edges(cap_id);
   positive_facets.push_back(cap_id);
   negative_facets.push_back(cap_id);
   cells_[cell].facets = std::move(positive_facets);
@@ -268,151 +449,241 @@ CellId CellComplex::split(CellId cell, PlaneId plane, FacetId* section) {
   return negative_cell;
 }
 
-void CellComplex::insert_triangle(const Vec3& a, const Vec3& b, const Vec3& c, std::int32_t cut_id) {
-  const Plane triangle_plane = Plane::through(a, b, c);
-  // Walls along the axis the normal is largest on (decided on the rounded normal; any axis with a
-  // non-zero normal component works, and that one is checked exactly).
-  int axis = 0;
-  for (int k = 1; k < 3; ++k) {
-    if (std::abs(triangle_plane.approx()[k].value) > std::abs(triangle_plane.approx()[axis].value)) axis = k;
-  }
-  if (geometry::normal_component_sign(triangle_plane, axis) == 0) {
-    for (int k = 0; k < 3; ++k) {
-      if (geometry::normal_component_sign(triangle_plane, k) != 0) axis = k;
-    }
-  }
-  const PlaneId cut_plane = add_plane(triangle_plane).id;
-  const Vec3* corners[3] = {&a, &b, &c};
-  OrientedPlane walls[3];
-  for (int e = 0; e < 3; ++e) {
-    const Vec3& from = *corners[e];
-    const Vec3& to = *corners[(e + 1) % 3];
-    const Vec3& opposite = *corners[(e + 2) % 3];
-    Plane wall = Plane::wall(from, to, axis);
-    if (geometry::side_of_point(wall, opposite) < 0) wall = wall.flipped();
-    walls[e] = add_plane(wall);  // sign: +1 when the stored plane's positive side is inward
-  }
-  side_memo_.clear();
-  side_memo_.push_back({cut_plane, {}});
-  for (const OrientedPlane& w : walls) side_memo_.push_back({w.id, {}});
+// ---- Insertion ---------------------------------------------------------------------------------
 
-  const CellId existing = static_cast<CellId>(cells_.size());
-  for (CellId cell = 0; cell < existing; ++cell) {
-    const int on_plane = classify(cell, cut_plane);
-    bool has_facet_on_plane = false;
-    for (const FacetId f : cells_[cell].facets) has_facet_on_plane = has_facet_on_plane || facets_[f].plane == cut_plane;
-    if (on_plane != 0 && !has_facet_on_plane) continue;
-    bool outside = false;
-    for (const OrientedPlane& w : walls) outside = outside || classify(cell, w.id) * w.sign == -1;
-    if (outside) continue;
-    CellId inside = cell;
-    for (const OrientedPlane& w : walls) {
-      const CellId negative = split(inside, w.id, nullptr);
-      if (negative >= 0 && w.sign < 0) inside = negative;
-    }
-    FacetId section = -1;
-    if (split(inside, cut_plane, &section) >= 0) {
-      facets_[section].covered = true;
-      facets_[section].cut = cut_id;
-    } else {
-      for (const FacetId f : cells_[inside].facets) {
-        if (facets_[f].plane != cut_plane) continue;
-        if (!facets_[f].covered) facets_[f].cut = cut_id;
-        facets_[f].covered = true;
+void CellComplex::cover(FacetId f) {
+  Facet& facet = facets_[f];
+  if (facet.stamp == insertion_.stamp) return;
+  facet.stamp = insertion_.stamp;
+  if (facet.cut < 0) facet.cut = insertion_.cut_id;
+  const OrientedPlane& plane = insertion_.plane;
+  const int alignment = facet.plane == plane.id
+                            ? 1
+                            : geometry::plane_alignment(registry_->plane(facet.plane), registry_->plane(plane.id));
+  if (alignment == 0) broken("a covered facet is not on the cut plane");
+  facet.winding += alignment * plane.sign;
+  touch_side(facet.front);
+  touch_side(facet.back);
+}
+
+bool CellComplex::process_cell(CellId cell) {
+  const PlaneId plane = insertion_.plane.id;
+  if (classify(cell, plane) != 0) {
+    // The cell only touches the plane: what matters is a facet on it, not yet covered by this
+    // triangle, and not outside the triangle's prism.
+    bool any = false;
+    for (const FacetId f : cells_[cell].facets) {
+      if (facets_[f].stamp != insertion_.stamp && facet_on_plane(f, plane) && !facet_outside_walls(f)) {
+        any = true;
+        break;
       }
     }
+    if (!any) return false;
   }
-  side_memo_.clear();
-}
-
-std::vector<std::int32_t> CellComplex::components(std::int32_t* num_components) const {
-  std::vector<CellId> parent(cells_.size());
-  std::iota(parent.begin(), parent.end(), 0);
-  auto find = [&](CellId x) {
-    while (parent[x] != x) x = parent[x] = parent[parent[x]];
-    return x;
-  };
-  for (const Facet& f : facets_) {
-    if (f.covered || f.front == kOutside || f.back == kOutside) continue;
-    const CellId a = find(f.front), b = find(f.back);
-    if (a != b) parent[std::max(a, b)] = std::min(a, b);
+  for (const OrientedPlane& wall : insertion_.walls) {
+    if (classify(cell, wall.id) * wall.sign == -1) return false;  // outside the prism, or touching it
   }
-  std::vector<std::int32_t> component(cells_.size(), -1);
-  std::int32_t count = 0;
-  for (CellId c = 0; c < static_cast<CellId>(cells_.size()); ++c) {
-    const CellId root = find(c);
-    if (component[root] < 0) component[root] = count++;
-    component[c] = component[root];
+  bool changed = false;
+  CellId inside = cell;
+  for (const OrientedPlane& wall : insertion_.walls) {
+    // A part cut off by one wall may lie wholly outside the next: then the triangle misses it.
+    const int position = classify(inside, wall.id) * wall.sign;
+    if (position == -1) return changed;
+    if (position != 0) continue;
+    const CellId negative = split(inside, wall.id, nullptr);
+    changed = true;
+    if (wall.sign < 0) inside = negative;
   }
-  if (num_components != nullptr) *num_components = count;
-  return component;
-}
-
-Vec3 CellComplex::position(VertexId v) const {
-  const Vertex& vertex = vertices_[v];
-  return geometry::tpi_coordinates(planes_[vertex.planes[0]], planes_[vertex.planes[1]], planes_[vertex.planes[2]]);
-}
-
-double CellComplex::cell_volume(CellId cell) const {
-  // Divergence theorem over fans of the outward-oriented facets, relative to one vertex of the cell.
-  const Vec3 origin = position(facets_[cells_[cell].facets.front()].vertices.front());
-  double six_volume = 0;
-  for (const FacetId f : cells_[cell].facets) {
-    const Facet& facet = facets_[f];
-    const bool outward_is_stored = facet.back == cell;
-    const std::size_t n = facet.vertices.size();
-    const Vec3 first = position(facet.vertices[0]) - origin;
-    for (std::size_t i = 1; i + 1 < n; ++i) {
-      Vec3 p = position(facet.vertices[i]) - origin, q = position(facet.vertices[i + 1]) - origin;
-      if (!outward_is_stored) std::swap(p, q);
-      six_volume += first.dot(p.cross(q));
+  // Inside the three walls the plane meets only the triangle: what lies on it here is covered.
+  FacetId section = -1;
+  if (split(inside, plane, &section) >= 0) {
+    cover(section);
+    return true;
+  }
+  for (const FacetId f : cells_[inside].facets) {
+    if (facets_[f].stamp != insertion_.stamp && facet_on_plane(f, plane)) {
+      cover(f);
+      changed = true;
     }
   }
-  return six_volume / 6.0;
+  return changed;
+}
+
+void CellComplex::insert_triangle(const CutTriangle& triangle, std::span<const Index> tets, std::vector<Index>* touched) {
+  insertion_ = Insertion{};
+  insertion_.stamp = next_stamp_++;
+  insertion_.cut_id = triangle.id;
+  insertion_.triangle = &triangle;
+  insertion_.touched = touched;
+  insertion_.plane = registry_->triangle_plane(triangle.a, triangle.b, triangle.c);
+  // Walls along the axis on which the normal is largest (chosen on rounded values; any axis with a
+  // non-zero component works, and that is checked exactly).
+  const Plane& cut_plane = registry_->plane(insertion_.plane.id);
+  int axis = 0;
+  for (int k = 1; k < 3; ++k) {
+    if (std::abs(cut_plane.approx()[k].value) > std::abs(cut_plane.approx()[axis].value)) axis = k;
+  }
+  if (geometry::normal_component_sign(cut_plane, axis) == 0) {
+    for (int k = 0; k < 3; ++k) {
+      if (geometry::normal_component_sign(cut_plane, k) != 0) axis = k;
+    }
+  }
+  const Vec3* corner[3] = {&triangle.a, &triangle.b, &triangle.c};
+  for (int e = 0; e < 3; ++e) {
+    insertion_.walls[e] = registry_->wall(*corner[e], *corner[(e + 1) % 3], axis, *corner[(e + 2) % 3]);
+  }
+  registry_->begin_memo({insertion_.plane.id, insertion_.walls[0].id, insertion_.walls[1].id, insertion_.walls[2].id});
+  std::vector<CellId> cells;
+  for (const Index tet : tets) {
+    if (!refined(tet)) {
+      if (!tet_material(tet) || !tet_may_be_cut(tet)) continue;
+      refine(tet);
+    }
+    cells.clear();
+    for (CellId c = first_cell_[tet]; c >= 0; c = cells_[c].next_in_tet) cells.push_back(c);
+    for (const CellId c : cells) {
+      if (cells_[c].material) process_cell(c);
+    }
+  }
+  registry_->end_memo();
+  insertion_ = Insertion{};
+}
+
+// ---- Measures and checks -----------------------------------------------------------------------
+
+double CellComplex::cell_volume6(CellId cell, const Vec3& origin) const {
+  double sum = 0;
+  for (const FacetId f : cells_[cell].facets) {
+    const Facet& facet = facets_[f];
+    const auto& corners = facet.corners;
+    const Vec3 first = registry_->position(corners[0].vertex) - origin;
+    double facet_sum = 0;
+    for (std::size_t i = 1; i + 1 < corners.size(); ++i) {
+      const Vec3 p = registry_->position(corners[i].vertex) - origin;
+      const Vec3 q = registry_->position(corners[i + 1].vertex) - origin;
+      facet_sum += first.dot(p.cross(q));
+    }
+    // The stored order is outward for the cell behind the facet.
+    sum += facet.back == cell ? facet_sum : -facet_sum;
+  }
+  return sum;
 }
 
 std::string CellComplex::validate() const {
+  const auto fail = [](const std::string& what, std::int64_t id) { return what + " " + std::to_string(id); };
+  const TetAdjacency& adj = mesh_->adjacency();
   for (FacetId f = 0; f < static_cast<FacetId>(facets_.size()); ++f) {
     const Facet& facet = facets_[f];
-    const std::size_t n = facet.vertices.size();
-    if (n < 3 || facet.edge_planes.size() != n) return "facet " + std::to_string(f) + " has fewer than 3 vertices";
+    const auto& corners = facet.corners;
+    const std::size_t n = corners.size();
+    if (n < 3) return fail("fewer than three corners: facet", f);
     for (std::size_t i = 0; i < n; ++i) {
-      const VertexId a = facet.vertices[i], b = facet.vertices[(i + 1) % n];
-      if (side(a, facet.plane) != 0) return "facet " + std::to_string(f) + ": a vertex is off its plane";
-      if (side(a, facet.edge_planes[i]) != 0 || side(b, facet.edge_planes[i]) != 0) {
-        return "facet " + std::to_string(f) + ": an edge is off its edge plane";
+      const VertexId u = corners[i].vertex, v = corners[(i + 1) % n].vertex;
+      if (registry_->side(u, facet.plane) != 0) return fail("a corner off its plane: facet", f);
+      const Edge& edge = edges_[corners[i].edge];
+      if (!((edge.a == u && edge.b == v) || (edge.a == v && edge.b == u))) return fail("corner and edge disagree: facet", f);
+      if (std::find(edge.facets.begin(), edge.facets.end(), f) == edge.facets.end()) {
+        return fail("an edge does not list its facet", f);
+      }
+      for (std::size_t j = i + 1; j < n; ++j) {
+        if (corners[j].vertex == u) return fail("a repeated corner: facet", f);
       }
     }
-    for (const CellId c : {facet.front, facet.back}) {
-      if (c == kOutside) continue;
-      const auto& list = cells_[c].facets;
-      if (std::find(list.begin(), list.end(), f) == list.end()) {
-        return "facet " + std::to_string(f) + " is missing from its cell's list";
+    for (const Side s : {facet.front, facet.back}) {
+      if (is_cell(s)) {
+        const auto& list = cells_[s].facets;
+        if (std::find(list.begin(), list.end(), f) == list.end()) return fail("missing from its cell's list: facet", f);
+        if (facet.mesh_face < 0 && cells_[s].tet != tet_of(facet.front == s ? facet.back : facet.front)) {
+          return fail("an interior facet between two tets: facet", f);
+        }
+      } else if (is_unrefined(s)) {
+        const Index tet = unrefined_tet(s);
+        if (refined(tet)) return fail("refers to a refined tet by its marker: facet", f);
+        if (facet.mesh_face < 0) return fail("an unrefined tet on an interior facet: facet", f);
+        bool on_tet = false;
+        for (int k = 0; k < 4; ++k) on_tet = on_tet || adj.tet_faces(tet, k) == facet.mesh_face;
+        if (!on_tet) return fail("an unrefined tet that does not have the facet's face: facet", f);
+      } else if (facet.mesh_face < 0 || adj.tets_of_face(facet.mesh_face).size() != 1) {
+        return fail("outside on a facet that is not on the mesh boundary: facet", f);
+      }
+    }
+  }
+  for (EdgeId e = 0; e < static_cast<EdgeId>(edges_.size()); ++e) {
+    const Edge& edge = edges_[e];
+    if (edge.a == edge.b) return fail("a zero-length edge", e);
+    for (const PlaneId p : edge.line) {
+      if (registry_->side(edge.a, p) != 0 || registry_->side(edge.b, p) != 0) return fail("an edge off its line", e);
+    }
+    for (const FacetId f : edge.facets) {
+      bool used = false;
+      for (const Corner& corner : facets_[f].corners) used = used || corner.edge == e;
+      if (!used) return fail("an edge lists a facet that does not use it: edge", e);
+    }
+  }
+  {
+    // One record per segment: two records for one segment would let a point inserted on one miss
+    // the facets of the other (a T-junction).
+    std::vector<std::pair<VertexId, VertexId>> segments;
+    for (const Edge& edge : edges_) segments.emplace_back(std::min(edge.a, edge.b), std::max(edge.a, edge.b));
+    std::sort(segments.begin(), segments.end());
+    if (std::adjacent_find(segments.begin(), segments.end()) != segments.end()) return "two records for one edge";
+  }
+  {
+    // No point is registered twice: candidates are pairs whose rounded positions are close, and a
+    // pair is the same point when one lies on all three planes of the other.
+    std::vector<VertexId> order;
+    for (const Edge& edge : edges_) order.push_back(edge.a);
+    std::sort(order.begin(), order.end());
+    order.erase(std::unique(order.begin(), order.end()), order.end());
+    std::sort(order.begin(), order.end(), [&](VertexId u, VertexId v) {
+      return registry_->position(u)[0] < registry_->position(v)[0];
+    });
+    constexpr double kNear = 1e-9;  // far above rounding, far below any feature of a test mesh
+    for (std::size_t i = 0; i < order.size(); ++i) {
+      const Vec3& p = registry_->position(order[i]);
+      for (std::size_t j = i + 1; j < order.size() && registry_->position(order[j])[0] - p[0] <= kNear; ++j) {
+        if ((registry_->position(order[j]) - p).norm() > kNear) continue;
+        bool same = true;
+        for (const PlaneId plane : registry_->vertex(order[j]).planes) same = same && registry_->side(order[i], plane) == 0;
+        if (same) return fail("a point registered twice: vertex", order[i]);
       }
     }
   }
   for (CellId c = 0; c < static_cast<CellId>(cells_.size()); ++c) {
-    std::vector<std::pair<VertexId, VertexId>> edges;
-    for (const FacetId f : cells_[c].facets) {
+    const Cell& cell = cells_[c];
+    std::vector<std::pair<VertexId, VertexId>> directed;
+    std::vector<VertexId> vertices;
+    for (const FacetId f : cell.facets) {
       const Facet& facet = facets_[f];
-      if (facet.front != c && facet.back != c) return "cell " + std::to_string(c) + " lists a facet not bounding it";
-      const bool outward_is_stored = facet.back == c;
-      const std::size_t n = facet.vertices.size();
+      if (facet.front != c && facet.back != c) return fail("lists a facet that does not bound it: cell", c);
+      const std::size_t n = facet.corners.size();
       for (std::size_t i = 0; i < n; ++i) {
-        VertexId a = facet.vertices[i], b = facet.vertices[(i + 1) % n];
-        if (!outward_is_stored) std::swap(a, b);
-        edges.emplace_back(a, b);
+        VertexId u = facet.corners[i].vertex, v = facet.corners[(i + 1) % n].vertex;
+        if (facet.front == c) std::swap(u, v);
+        directed.emplace_back(u, v);
+        vertices.push_back(u);
       }
     }
-    std::sort(edges.begin(), edges.end());
-    for (std::size_t i = 0; i < edges.size(); ++i) {
-      if (i > 0 && edges[i] == edges[i - 1]) return "cell " + std::to_string(c) + " uses an edge twice in one direction";
-      const std::pair<VertexId, VertexId> reverse(edges[i].second, edges[i].first);
-      if (!std::binary_search(edges.begin(), edges.end(), reverse)) {
-        return "cell " + std::to_string(c) + " is not closed";
+    std::sort(directed.begin(), directed.end());
+    for (std::size_t i = 0; i < directed.size(); ++i) {
+      if (i > 0 && directed[i] == directed[i - 1]) return fail("uses an edge twice in one direction: cell", c);
+      if (!std::binary_search(directed.begin(), directed.end(), std::make_pair(directed[i].second, directed[i].first))) {
+        return fail("is not closed: cell", c);
       }
     }
-    if (!(cell_volume(c) > 0)) return "cell " + std::to_string(c) + " has no volume";
+    std::sort(vertices.begin(), vertices.end());
+    vertices.erase(std::unique(vertices.begin(), vertices.end()), vertices.end());
+    for (const FacetId f : cell.facets) {
+      const int inner = facets_[f].back == c ? -1 : 1;
+      for (const VertexId v : vertices) {
+        if (registry_->side(v, facets_[f].plane) * inner < 0) return fail("is not convex: cell", c);
+      }
+    }
+    const Vec3 origin = registry_->position(vertices.front());
+    if (!(cell_volume6(c, origin) > 0)) return fail("has no volume: cell", c);
+    bool listed = false;
+    for (CellId k = first_cell_[cell.tet]; k >= 0 && !listed; k = cells_[k].next_in_tet) listed = k == c;
+    if (!listed) return fail("missing from its tet's list: cell", c);
   }
   return {};
 }

@@ -1,131 +1,212 @@
 #pragma once
-// The material of one tet as a complex of convex cells, refined by cut triangles.
+// The material of the whole mesh as one complex of convex cells, refined by cut triangles.
 //
-// Start: one cell, the tet, bounded by its four face planes. Inserting a cut triangle splits only
-// the cells whose closure meets the triangle: first by the triangle's three walls (planes through
-// each edge along the axis that the triangle's normal is largest on), keeping the outer pieces as
-// they are, then the piece inside the walls by the triangle's plane. The facet created on the plane
-// then lies inside the triangle, so it is "covered": material does not pass through it. A cell that
-// already has a facet on the triangle's plane inside the walls gets that facet covered instead
-// (cuts along earlier cuts or along tet faces).
+// Every tet starts as one cell bounded by its four faces. A tet is "refined" (given explicit cells,
+// facets and edges) the first time a cut triangle touches it; until then it is implicit, one cell,
+// and facets of refined neighbours refer to it by its tet id. This keeps the cost of a cut
+// proportional to the tets it touches, not to the size of the mesh.
 //
-// Material components of the tet are the classes of cells joined through uncovered facets. This
-// handles partial cuts (the cells on both sides of a cut stay joined around its edge), closed cut
-// surfaces floating inside the tet, T-cuts, and coplanar overlapping cuts with no special cases.
+// Inserting a cut triangle splits only the cells whose closure meets it: first by its three walls
+// (planes through each edge along the axis on which the triangle's normal is largest: the paper's
+// virtual triangles), keeping the outer parts as they are, then the part inside the walls by the
+// triangle's plane. The facet created on that plane lies inside the triangle, so it is "covered":
+// material does not pass through it. A cell that already has a facet on the triangle's plane, inside
+// the walls, gets that facet covered instead (cuts along earlier cuts or along tet faces). Covered
+// facets are the paper's polygon mesh of the cut surface; uncovered facets between cells of one tet
+// are where material continues.
 //
-// The complex is conforming: facets are shared records (front cell, back cell), and a vertex
-// inserted on an edge is inserted into every facet that has that edge. All vertices are meetings
-// of three planes of the tet's plane table; every decision uses the exact predicates of
-// geometry/plane.hpp. Identical planes are stored once, so walls that coincide with tet faces or
-// other cuts refer to the same plane.
+// The complex is conforming across the whole mesh: a facet on a mesh face is one record shared by
+// the cells of the two tets, and a point put on an edge goes into every facet around that edge
+// (edges are radial records listing their facets). So two tets that share a face see the very same
+// polygons on it, by construction, and the material surface has no T-junctions.
+//
+// Every vertex is a point of the intersection registry, and every decision is an exact side test.
 
-#include <tetcut/types.hpp>
+#include <tetcut/tet_mesh.hpp>
 
 #include <array>
 #include <cstdint>
+#include <span>
 #include <string>
-#include <unordered_map>
 #include <vector>
 
-#include "geometry/plane.hpp"
+#include "registry/intersection_registry.hpp"
 
 namespace tetcut::cells {
 
-using PlaneId = std::int32_t;
-using VertexId = std::int32_t;
-using FacetId = std::int32_t;
+using registry::PlaneId;
+using registry::VertexId;
 using CellId = std::int32_t;
+using FacetId = std::int32_t;
+using EdgeId = std::int32_t;
 
-inline constexpr CellId kOutside = -1;
+/// What lies on one side of a facet: a cell (>= 0), the outside of the mesh, or a tet that is not
+/// refined yet (its one implicit cell).
+using Side = std::int32_t;
+inline constexpr Side kOutside = -1;
+inline constexpr Side unrefined_side(Index tet) { return -2 - tet; }
+inline constexpr bool is_cell(Side s) { return s >= 0; }
+inline constexpr bool is_unrefined(Side s) { return s <= -2; }
+inline constexpr Index unrefined_tet(Side s) { return -2 - s; }
 
-struct Vertex {
-  std::array<PlaneId, 3> planes;
-  std::int8_t orientation;  // sign of det3 of the three normals
+/// A facet corner: a vertex and the edge from it to the next corner's vertex.
+struct Corner {
+  VertexId vertex;
+  EdgeId edge;
+};
+
+struct Edge {
+  VertexId a = -1, b = -1;
+  /// Two distinct planes whose intersection is the edge's line.
+  std::array<PlaneId, 2> line{};
+  Index mesh_edge = -1;  ///< the mesh edge it lies on, or -1
+  EdgeId next_on_mesh_edge = -1;
+  /// Every facet that has this edge (the radial set).
+  std::vector<FacetId> facets;
 };
 
 struct Facet {
   PlaneId plane = -1;
-  /// Vertex cycle, counter-clockwise seen from the side the plane's normal points to.
-  std::vector<VertexId> vertices;
-  /// edge_planes[i] is the second plane through edge (vertices[i], vertices[i + 1]).
-  std::vector<PlaneId> edge_planes;
-  CellId front = kOutside;  ///< cell on the side the plane's normal points to
-  CellId back = kOutside;
-  bool covered = false;     ///< inside a cut triangle: a material boundary
-  std::int32_t cut = -1;    ///< the cut triangle that covered it first, or -1
-  /// Tet face (0-3, opposite that local node) this facet lies on, or -1 for facets inside the tet.
-  std::int8_t tet_face = -1;
+  /// The cells on the side the plane's normal points to (front) and on the other side (back).
+  Side front = kOutside, back = kOutside;
+  /// Convex polygon, counter-clockwise seen from the front. Consecutive corners may be collinear.
+  std::vector<Corner> corners;
+  Index mesh_face = -1;  ///< the mesh face it lies on, or -1
+  FacetId next_on_mesh_face = -1;
+  /// The first cut triangle covering this facet, or -1 when uncovered (material passes through).
+  std::int32_t cut = -1;
+  /// Sum over the cut triangles covering it of +1 (triangle normal along the plane's) or -1: the
+  /// jump of the winding number of the cut surface when crossing from back to front.
+  std::int32_t winding = 0;
+  /// Last insertion that covered it, so that the two cells sharing it count a triangle once.
+  std::int32_t stamp = -1;
+
+  bool covered() const { return cut >= 0; }
 };
 
 struct Cell {
+  Index tet = -1;
+  CellId next_in_tet = -1;
+  bool material = true;
   std::vector<FacetId> facets;
+};
+
+/// A cut triangle in rest space, with its id in the caller's numbering.
+struct CutTriangle {
+  Vec3 a, b, c;
+  std::int32_t id = -1;
 };
 
 class CellComplex {
  public:
-  /// The four corners of a positively oriented tet.
-  explicit CellComplex(const std::array<Vec3, 4>& corners);
+  /// No tet is refined yet. `mesh` and `registry` must outlive the complex; the registry must be
+  /// built on mesh.rest().
+  CellComplex(const TetMesh& mesh, registry::IntersectionRegistry& registry);
 
-  /// Inserts the cut triangle (a, b, c), which must not be degenerate (collinear corners), with an
-  /// id recorded on the facets it covers. O(cells touched x facets per cell).
-  void insert_triangle(const Vec3& a, const Vec3& b, const Vec3& c, std::int32_t cut_id);
+  /// Inserts a cut triangle whose corners are not collinear. `tets` must contain every tet whose
+  /// closure meets the triangle (more tets only cost time). Appends to `touched` each tet whose
+  /// cells, or whose facets' covering, changed, once per call. Cost: O(sum over touched cells of
+  /// their size), independent of the mesh size.
+  void insert_triangle(const CutTriangle& triangle, std::span<const Index> tets, std::vector<Index>* touched);
 
-  /// Component id of every cell (0 .. num_components - 1), ordered by the lowest cell id.
-  std::vector<std::int32_t> components(std::int32_t* num_components) const;
+  /// Marks an unrefined tet as holding no material (embedding); cells of refined tets are marked
+  /// through set_cell_material.
+  void set_tet_material(Index tet, bool material);
+  void set_cell_material(CellId cell, bool material) { cells_[cell].material = material; }
+  /// Whether an unrefined tet holds material.
+  bool tet_material(Index tet) const { return tet_material_[tet] != 0; }
 
-  /// Volume of a cell from rounded vertex coordinates (output only).
-  double cell_volume(CellId cell) const;
-  /// Rounded coordinates of a vertex (output only).
-  Vec3 position(VertexId v) const;
+  bool refined(Index tet) const { return first_cell_[tet] >= 0; }
+  /// First cell of a refined tet (then follow Cell::next_in_tet), or -1.
+  CellId first_cell(Index tet) const { return first_cell_[tet]; }
+  /// Facets on a mesh face (then follow Facet::next_on_mesh_face), or -1 when none exist yet.
+  FacetId first_facet_on_face(Index face) const { return face_first_facet_[face]; }
 
+  const TetMesh& mesh() const { return *mesh_; }
+  const registry::IntersectionRegistry& registry() const { return *registry_; }
   const std::vector<Cell>& cells() const { return cells_; }
   const std::vector<Facet>& facets() const { return facets_; }
-  const std::vector<Vertex>& vertices() const { return vertices_; }
-  const std::vector<geometry::Plane>& planes() const { return planes_; }
+  const std::vector<Edge>& edges() const { return edges_; }
 
-  /// Checks the complex's invariants exactly: every facet's vertices lie on its plane and each
-  /// edge's endpoints on its edge plane; every cell is closed, each of its edges used once in each
-  /// direction by its outward-oriented facets; front/back and cell facet lists agree. Returns an
-  /// empty string when all hold, else the first violation. O(total facet size x log).
+  /// The tet on side `s` of a facet, or -1 for the outside.
+  Index tet_of(Side s) const;
+  /// Whether side `s` holds material (false for the outside).
+  bool side_is_material(Side s) const;
+
+  /// Volume of a cell, times 6, from rounded vertex positions relative to `origin`: the sum over
+  /// its facets of signed fan volumes. Each facet's fan starts at its first corner, so a facet
+  /// shared by two cells adds opposite amounts to them and the cells of a tet add up to the tet.
+  double cell_volume6(CellId cell, const Vec3& origin) const;
+
+  /// Checks the complex's invariants exactly and returns the first violation, or an empty string:
+  /// every facet's corners lie on its plane and each edge on both planes of its line; edges and
+  /// facets list each other; every cell is closed (each directed edge of its outward facets used
+  /// once each way), convex (every vertex on the inner side of each facet), with positive volume;
+  /// front and back agree with the cells' facet lists. O(total size squared per cell).
   std::string validate() const;
 
-  /// Side (+1, 0, -1) of a vertex relative to a plane of the table. Exact.
-  int side(VertexId v, PlaneId plane) const;
-
  private:
-  struct OrientedPlane {
-    PlaneId id;
-    int sign;  // +1 if the requested orientation matches the stored plane, -1 if opposite
-  };
-  OrientedPlane add_plane(const geometry::Plane& plane);
-  VertexId add_vertex(PlaneId a, PlaneId b, PlaneId c);
+  CellId refine(Index tet);
+  PlaneId face_plane(Index face);
+  VertexId node_vertex(Index node, Index tet);
+  void add_face_facet(Index face, Index tet, CellId cell);
+  /// Corners along mesh edge (from -> to), creating its first edge record when missing; registers
+  /// `facet` on each edge record.
+  void append_mesh_edge_chain(Index mesh_edge, Index from, Index to, Index tet, FacetId facet,
+                              std::vector<Corner>* corners);
+
+  /// Whether an unrefined tet's closed volume can be changed by the triangle (same tests as
+  /// process_cell, on the four corners).
+  bool tet_may_be_cut(Index tet) const;
+  /// Splits and covers inside one cell; returns whether anything changed.
+  bool process_cell(CellId cell);
+
+  /// -1, 0 or +1 when every vertex of the cell is <= 0, some are on each side, or all are >= 0
+  /// (2 when all are on the plane, impossible for a cell with volume).
+  int classify(CellId cell, PlaneId plane) const;
+  /// Whether every corner of the facet lies on the plane.
+  bool facet_on_plane(FacetId facet, PlaneId plane) const;
+  /// Whether every corner of the facet is on the outer side of, or on, some wall of the insertion.
+  bool facet_outside_walls(FacetId facet) const;
 
   /// Splits `cell` by `plane` when the plane passes through its interior. The part on the positive
   /// side keeps the id `cell`; returns the id of the negative part, or -1 when nothing was split.
-  /// The facet created on the plane is returned through `section`.
+  /// The new facet on the plane is returned through `section`.
   CellId split(CellId cell, PlaneId plane, FacetId* section);
+  /// Splits facet f, whose corners are all on `plane` or on one side of it except that both sides
+  /// occur, into its positive part (kept as f) and its negative part (returned).
+  FacetId split_facet(FacetId f, PlaneId plane, CellId cell, CellId negative_cell);
+  /// Inserts vertex w, which lies strictly inside edge e, into every facet around e.
+  void insert_on_edge(EdgeId e, VertexId w);
+  EdgeId add_edge(VertexId a, VertexId b, std::array<PlaneId, 2> line, Index mesh_edge);
+  void cover(FacetId facet);
+  void touch_side(Side s);
+  void touch(Index tet);
 
-  /// -1, 0 or +1 when all vertices of the cell are <= 0, mixed, or >= 0 relative to the plane;
-  /// 2 when all are exactly on it (impossible for a cell with volume).
-  int classify(CellId cell, PlaneId plane) const;
-
-  void index_edges(FacetId f);
-  void unindex_edges(FacetId f);
-  /// Inserts w between u and v in every facet that has the edge (u, v).
-  void insert_on_edge(VertexId u, VertexId v, VertexId w);
-
-  static std::uint64_t edge_key(VertexId u, VertexId v) {
-    if (u > v) std::swap(u, v);
-    return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(u)) << 32) | static_cast<std::uint32_t>(v);
-  }
-
-  std::vector<geometry::Plane> planes_;
-  std::vector<Vertex> vertices_;
-  std::vector<Facet> facets_;
+  const TetMesh* mesh_;
+  registry::IntersectionRegistry* registry_;
   std::vector<Cell> cells_;
-  std::unordered_map<std::uint64_t, std::vector<FacetId>> facets_of_edge_;
-  // Memo of vertex sides for the planes of the insertion in progress (2 = not yet computed).
-  mutable std::vector<std::pair<PlaneId, std::vector<std::int8_t>>> side_memo_;
+  std::vector<Facet> facets_;
+  std::vector<Edge> edges_;
+  std::vector<CellId> first_cell_;         // per tet
+  std::vector<std::uint8_t> tet_material_; // per tet, for unrefined tets
+  std::vector<FacetId> face_first_facet_;  // per mesh face
+  std::vector<PlaneId> face_plane_;        // per mesh face, -1 until needed
+  std::vector<EdgeId> mesh_edge_first_;    // per mesh edge
+  std::vector<VertexId> node_vertex_;      // per mesh node, -1 until needed
+
+  // The insertion in progress.
+  struct Insertion {
+    std::int32_t stamp = -1;
+    std::int32_t cut_id = -1;
+    registry::OrientedPlane plane;
+    std::array<registry::OrientedPlane, 3> walls;
+    const CutTriangle* triangle = nullptr;
+    std::vector<Index>* touched = nullptr;
+  };
+  Insertion insertion_;
+  std::int32_t next_stamp_ = 0;
+  std::vector<std::int32_t> tet_touch_stamp_;  // per tet: last insertion that reported it
 };
 
 }  // namespace tetcut::cells

@@ -240,21 +240,104 @@ int plane_alignment(const Plane& p, const Plane& q) {
 
 bool same_plane(const Plane& p, const Plane& q) { return plane_alignment(p, q) != 0; }
 
-Vec3 tpi_coordinates(const Plane& a, const Plane& b, const Plane& c) {
-  // Cramer's rule in long double; used for output and volumes, never for decisions.
-  using L = long double;
-  const L n[3][3] = {{a.approx()[0].value, a.approx()[1].value, a.approx()[2].value},
-                     {b.approx()[0].value, b.approx()[1].value, b.approx()[2].value},
-                     {c.approx()[0].value, c.approx()[1].value, c.approx()[2].value}};
-  const L d[3] = {-a.approx()[3].value, -b.approx()[3].value, -c.approx()[3].value};
-  const L det = det3(n[0], n[1], n[2]);
-  Vec3 x;
-  for (int k = 0; k < 3; ++k) {
-    L m[3][3];
+namespace {
+
+// Rows (n, d) of the three planes as Approx values.
+struct ApproxRows {
+  Approx n[3][3];
+  Approx d[3];
+  ApproxRows(const Plane& a, const Plane& b, const Plane& c) {
+    const Plane* planes[3] = {&a, &b, &c};
     for (int r = 0; r < 3; ++r) {
-      for (int col = 0; col < 3; ++col) m[r][col] = (col == k) ? d[r] : n[r][col];
+      for (int k = 0; k < 3; ++k) n[r][k] = planes[r]->approx()[k];
+      d[r] = -planes[r]->approx()[3];
     }
-    x[k] = static_cast<double>(det3(m[0], m[1], m[2]) / det);
+  }
+};
+
+// Cramer's rule for the point where three planes meet: (det N_0, det N_1, det N_2, det N), where
+// N_k is the normal matrix N with column k replaced by -d. T is Approx or an exact integer type.
+template <typename T>
+std::array<T, 4> cramer(const T (&n)[3][3], const T (&minus_d)[3]) {
+  std::array<T, 4> h;
+  for (int k = 0; k < 3; ++k) {
+    T m[3][3];
+    for (int r = 0; r < 3; ++r) {
+      for (int col = 0; col < 3; ++col) m[r][col] = (col == k) ? minus_d[r] : n[r][col];
+    }
+    h[k] = det3(m[0], m[1], m[2]);
+  }
+  h[3] = det3(n[0], n[1], n[2]);
+  return h;
+}
+
+// Largest relative error of rounded coordinates that we accept without the exact evaluation:
+// 2^-50 of the point's largest coordinate (a few units in the last place). Output geometry only;
+// no decision depends on it.
+constexpr double kCoordinateTolerance = 0x1p-50;
+
+}  // namespace
+
+Homogeneous tpi_homogeneous(const Plane& a, const Plane& b, const Plane& c) {
+  const ApproxRows rows(a, b, c);
+  return cramer(rows.n, rows.d);
+}
+
+Homogeneous explicit_homogeneous(const Vec3& x) {
+  return {Approx::exact(x[0]), Approx::exact(x[1]), Approx::exact(x[2]), Approx::exact(1)};
+}
+
+int side_of_tpi(const Plane& a, const Plane& b, const Plane& c, const Homogeneous& h, int orientation,
+                const Plane& q) {
+  const auto& p = q.approx();
+  const int s = certain_sign(p[0] * h[0] + p[1] * h[1] + p[2] * h[2] + p[3] * h[3]);
+  if (s != 2) return s * orientation;
+  return plane_determinant_sign(a, b, c, q) * orientation;
+}
+
+int side_of_point(const Plane& q, const Vec3& x, const Homogeneous& h) {
+  const auto& p = q.approx();
+  const int s = certain_sign(p[0] * h[0] + p[1] * h[1] + p[2] * h[2] + p[3]);
+  if (s != 2) return s;
+  return side_of_point(q, x);
+}
+
+Vec3 tpi_coordinates(const Plane& a, const Plane& b, const Plane& c) {
+  return tpi_coordinates(a, b, c, tpi_homogeneous(a, b, c));
+}
+
+Vec3 tpi_coordinates(const Plane& a, const Plane& b, const Plane& c, const Homogeneous& h) {
+  const double w = h[3].value;
+  bool accurate = std::isfinite(w) && std::abs(w) > h[3].error * kErrorSlack;
+  Vec3 x;
+  if (accurate) {
+    // |x_k - X/W| <= (err_X + |x_k| err_W) / (|W| - err_W), to first order; accept it when it is tiny
+    // next to the point's largest coordinate.
+    const double scale = std::abs(w) - h[3].error * kErrorSlack;
+    double magnitude = 0, bound = 0;
+    for (int k = 0; k < 3; ++k) {
+      x[k] = h[k].value / w;
+      magnitude = std::max(magnitude, std::abs(x[k]));
+      bound = std::max(bound, (h[k].error + std::abs(x[k]) * h[3].error) * kErrorSlack / scale);
+    }
+    accurate = std::isfinite(magnitude) && bound <= kCoordinateTolerance * magnitude;
+  }
+  if (accurate) return x;
+  ScaledInputs scaled;
+  scaled.include(a);
+  scaled.include(b);
+  scaled.include(c);
+  const auto ea = ExactPlanes::coefficients(a, scaled);
+  const auto eb = ExactPlanes::coefficients(b, scaled);
+  const auto ec = ExactPlanes::coefficients(c, scaled);
+  const mpz_class n[3][3] = {{ea[0], ea[1], ea[2]}, {eb[0], eb[1], eb[2]}, {ec[0], ec[1], ec[2]}};
+  const mpz_class minus_d[3] = {-ea[3], -eb[3], -ec[3]};
+  const auto exact = cramer(n, minus_d);
+  for (int k = 0; k < 3; ++k) {
+    mpq_class value(exact[k], exact[3]);
+    value.canonicalize();  // GMP's rational functions need a positive, reduced denominator
+    // The exact planes pass through the inputs scaled by 2^scale, and so does their meeting point.
+    x[k] = std::ldexp(value.get_d(), -scaled.scale);
   }
   return x;
 }

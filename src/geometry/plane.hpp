@@ -81,7 +81,30 @@ bool same_plane(const Plane& p, const Plane& q);
 /// +1 when same_plane and the normals point the same way, -1 when opposite, 0 when not the same plane.
 int plane_alignment(const Plane& p, const Plane& q);
 
-/// Rounded coordinates of the point where a, b and c meet (for output and volumes only).
+/// Homogeneous coordinates (X, Y, Z, W) of the point where a, b and c meet, with error bounds: the
+/// point is (X, Y, Z) / W. W is det3 of the three normals (non-zero for a point), and by Cramer's
+/// rule X, Y, Z are det3 of the normals with one column replaced by -d. For every plane q,
+/// q.n . (X, Y, Z) + q.d W = det4[a; b; c; q], so a side test on a cached point is a four-term dot
+/// product (the indirect-predicate idea of Attene and Cherchi et al.).
+using Homogeneous = std::array<Approx, 4>;
+Homogeneous tpi_homogeneous(const Plane& a, const Plane& b, const Plane& c);
+
+/// Homogeneous coordinates (x, y, z, 1) of an input point: exact.
+Homogeneous explicit_homogeneous(const Vec3& x);
+
+/// Side of the point where a, b and c meet relative to q, filtered on the cached homogeneous
+/// coordinates `h` of that point and exact when the filter cannot decide. `orientation` is
+/// normal_determinant_sign(a, b, c).
+int side_of_tpi(const Plane& a, const Plane& b, const Plane& c, const Homogeneous& h, int orientation, const Plane& q);
+
+/// Side of an input point x relative to q, filtered on the homogeneous coordinates of x (see
+/// explicit_homogeneous) and exact otherwise.
+int side_of_point(const Plane& q, const Vec3& x, const Homogeneous& h);
+
+/// Coordinates of the point where a, b and c meet, correctly rounded or nearly so: from the
+/// filtered homogeneous coordinates when their error bound is tiny, otherwise from an exact
+/// rational evaluation. For output and volumes only, never for decisions.
 Vec3 tpi_coordinates(const Plane& a, const Plane& b, const Plane& c);
+Vec3 tpi_coordinates(const Plane& a, const Plane& b, const Plane& c, const Homogeneous& h);
 
 }  // namespace tetcut::geometry

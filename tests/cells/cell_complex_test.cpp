@@ -1,14 +1,19 @@
-// One tet cut by triangles: components and volumes against analytic answers, and invariants
-// (volumes add up, results independent of triangle order) on random and degenerate soups.
+// The cell complex: components and volumes against analytic answers on one tet, and its invariants
+// (validate() after every insertion, volumes adding up, independence of the triangle order) on
+// multi-tet meshes, where facets on shared faces belong to two tets at once.
 
 #include <gtest/gtest.h>
 
+#include <tetcut/generators.hpp>
+
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
+#include <memory>
+#include <numeric>
 #include <random>
 
 #include "cells/cell_complex.hpp"
+#include "components/material_components.hpp"
 
 namespace tetcut::cells {
 namespace {
@@ -17,38 +22,74 @@ namespace {
 const std::array<Vec3, 4> kCorner = {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(0, 0, 1)};
 constexpr double kTetVolume = 1.0 / 6.0;
 
-struct Tri {
-  Vec3 a, b, c;
+TetMesh one_tet(const std::array<Vec3, 4>& corners = kCorner) {
+  Points p(4, 3);
+  for (int k = 0; k < 4; ++k) p.row(k) = corners[k].transpose();
+  Tets t(1, 4);
+  t << 0, 1, 2, 3;
+  return TetMesh(p, t);
+}
+
+// A mesh with its registry and complex; not movable, as the complex points into both.
+struct Complex {
+  explicit Complex(TetMesh m) : mesh(std::move(m)), registry(mesh.rest()), complex(mesh, registry) {}
+  TetMesh mesh;
+  registry::IntersectionRegistry registry;
+  CellComplex complex;
+
+  // Inserts every triangle with all tets as candidates; validates after each when asked.
+  void insert(const std::vector<CutTriangle>& triangles, bool validate_each = false) {
+    std::vector<Index> all(static_cast<std::size_t>(mesh.num_tets()));
+    std::iota(all.begin(), all.end(), 0);
+    std::vector<Index> touched;
+    for (const CutTriangle& t : triangles) {
+      complex.insert_triangle(t, all, &touched);
+      if (validate_each) {
+        ASSERT_EQ(complex.validate(), "");
+      }
+    }
+    ASSERT_EQ(complex.validate(), "");
+  }
+
+  // Component volumes over all tets, largest first.
+  std::vector<double> component_volumes() const {
+    const components::MaterialComponents c = components::find_components(complex);
+    std::vector<double> volumes;
+    for (Index t = 0; t < mesh.num_tets(); ++t) {
+      std::vector<double> v(static_cast<std::size_t>(c.count[t]), 0.0);
+      if (!complex.refined(t)) {
+        const auto& p = mesh.rest();
+        const auto& tt = mesh.tets();
+        v[0] = signed_volume(p.row(tt(t, 0)), p.row(tt(t, 1)), p.row(tt(t, 2)), p.row(tt(t, 3)));
+      } else {
+        for (CellId cell = complex.first_cell(t); cell >= 0; cell = complex.cells()[cell].next_in_tet) {
+          v[c.cell_component[cell]] += c.cell_volume6[cell] / 6;
+        }
+      }
+      volumes.insert(volumes.end(), v.begin(), v.end());
+    }
+    std::sort(volumes.rbegin(), volumes.rend());
+    return volumes;
+  }
 };
 
-// A triangle in the plane {x[axis] = value} large enough to cover the unit box.
-Tri covering(int axis, double value) {
+CutTriangle tri(const Vec3& a, const Vec3& b, const Vec3& c, std::int32_t id = 0) { return {a, b, c, id}; }
+
+// A triangle in the plane {x[axis] = value} large enough to cover the box [-1, 3]^3.
+CutTriangle covering(int axis, double value) {
   const int u = (axis + 1) % 3, v = (axis + 2) % 3;
   Vec3 a, b, c;
   a[axis] = b[axis] = c[axis] = value;
   a[u] = -5, a[v] = -5;
   b[u] = 10, b[v] = -5;
   c[u] = -5, c[v] = 10;
-  return {a, b, c};
+  return {a, b, c, 0};
 }
 
-// Component volumes, largest first.
-std::vector<double> component_volumes(const CellComplex& complex) {
-  std::int32_t count = 0;
-  const auto component = complex.components(&count);
-  std::vector<double> volumes(static_cast<std::size_t>(count), 0.0);
-  for (CellId c = 0; c < static_cast<CellId>(complex.cells().size()); ++c) volumes[component[c]] += complex.cell_volume(c);
-  std::sort(volumes.rbegin(), volumes.rend());
-  return volumes;
-}
-
-std::vector<double> cut(const std::vector<Tri>& triangles, const std::array<Vec3, 4>& tet = kCorner) {
-  CellComplex complex(tet);
-  for (std::size_t i = 0; i < triangles.size(); ++i) {
-    complex.insert_triangle(triangles[i].a, triangles[i].b, triangles[i].c, static_cast<std::int32_t>(i));
-  }
-  EXPECT_EQ(complex.validate(), "");
-  return component_volumes(complex);
+std::vector<double> cut_one_tet(const std::vector<CutTriangle>& triangles) {
+  Complex c(one_tet());
+  c.insert(triangles, true);
+  return c.component_volumes();
 }
 
 void expect_volumes(const std::vector<double>& actual, std::vector<double> expected) {
@@ -57,103 +98,174 @@ void expect_volumes(const std::vector<double>& actual, std::vector<double> expec
   for (std::size_t i = 0; i < expected.size(); ++i) EXPECT_NEAR(actual[i], expected[i], 1e-14) << "component " << i;
 }
 
-TEST(CellComplex, UncutTetIsOneComponent) { expect_volumes(cut({}), {kTetVolume}); }
+TEST(CellComplex, UncutTetIsOneComponentAndStaysUnrefined) {
+  Complex c(one_tet());
+  c.insert({tri(Vec3(2, 2, 2), Vec3(3, 2, 2), Vec3(2, 3, 2))});
+  EXPECT_FALSE(c.complex.refined(0));
+  expect_volumes(c.component_volumes(), {kTetVolume});
+}
 
 TEST(CellComplex, PlaneThroughTheMiddle) {
   const double top = 0.5 * 0.5 * 0.5 / 6;
-  expect_volumes(cut({covering(2, 0.5)}), {top, kTetVolume - top});
+  expect_volumes(cut_one_tet({covering(2, 0.5)}), {top, kTetVolume - top});
 }
 
 TEST(CellComplex, PartialCutLeavesOneComponent) {
-  expect_volumes(cut({{Vec3(0.1, 0.1, 0.25), Vec3(0.4, 0.1, 0.25), Vec3(0.1, 0.4, 0.25)}}), {kTetVolume});
+  expect_volumes(cut_one_tet({tri(Vec3(0.1, 0.1, 0.25), Vec3(0.4, 0.1, 0.25), Vec3(0.1, 0.4, 0.25))}), {kTetVolume});
   // A cut entering through a face but not leaving the tet.
-  expect_volumes(cut({{Vec3(-1, 0.1, 0.2), Vec3(0.3, 0.1, 0.2), Vec3(-1, 0.3, 0.2)}}), {kTetVolume});
+  expect_volumes(cut_one_tet({tri(Vec3(-1, 0.1, 0.2), Vec3(0.3, 0.1, 0.2), Vec3(-1, 0.3, 0.2))}), {kTetVolume});
 }
 
 TEST(CellComplex, TwoCrossingPlanesGiveFourPieces) {
   const double a = std::pow(0.6, 3) / 6, b = std::pow(0.8, 3) / 6 - a;
-  expect_volumes(cut({covering(0, 0.2), covering(1, 0.2)}), {a, b, b, kTetVolume - a - 2 * b});
+  expect_volumes(cut_one_tet({covering(0, 0.2), covering(1, 0.2)}), {a, b, b, kTetVolume - a - 2 * b});
 }
 
 TEST(CellComplex, TCutGivesThreePieces) {
   // Full cut x = 0.2, and a cut y = 0.2 only where x > 0.2 (it ends exactly on the first cut).
-  const Tri half{Vec3(0.2, 0.2, -5), Vec3(10, 0.2, -5), Vec3(0.2, 0.2, 10)};
+  const CutTriangle half = tri(Vec3(0.2, 0.2, -5), Vec3(10, 0.2, -5), Vec3(0.2, 0.2, 10));
   const double a = std::pow(0.6, 3) / 6, b = std::pow(0.8, 3) / 6 - a;
-  expect_volumes(cut({covering(0, 0.2), half}), {a, b, kTetVolume - a - b});
+  expect_volumes(cut_one_tet({covering(0, 0.2), half}), {a, b, kTetVolume - a - b});
   // The same T-cut with the stem inserted first.
-  expect_volumes(cut({half, covering(0, 0.2)}), {a, b, kTetVolume - a - b});
+  expect_volumes(cut_one_tet({half, covering(0, 0.2)}), {a, b, kTetVolume - a - b});
+}
+
+std::vector<CutTriangle> octahedron(const Vec3& o, double r) {
+  const Vec3 px = o + Vec3(r, 0, 0), nx = o - Vec3(r, 0, 0), py = o + Vec3(0, r, 0), ny = o - Vec3(0, r, 0),
+             pz = o + Vec3(0, 0, r), nz = o - Vec3(0, 0, r);
+  return {tri(px, py, pz), tri(py, nx, pz), tri(nx, ny, pz), tri(ny, px, pz),
+          tri(py, px, nz), tri(nx, py, nz), tri(ny, nx, nz), tri(px, ny, nz)};
 }
 
 TEST(CellComplex, ClosedSurfaceInsideTheTetFloats) {
-  // An octahedron of radius r around (0.2, 0.2, 0.2), wholly inside the tet.
-  const Vec3 o(0.2, 0.2, 0.2);
   const double r = 0.0625;
-  const Vec3 px = o + Vec3(r, 0, 0), nx = o - Vec3(r, 0, 0), py = o + Vec3(0, r, 0), ny = o - Vec3(0, r, 0),
-             pz = o + Vec3(0, 0, r), nz = o - Vec3(0, 0, r);
-  const std::vector<Tri> octahedron = {{px, py, pz}, {py, nx, pz}, {nx, ny, pz}, {ny, px, pz},
-                                       {py, px, nz}, {nx, py, nz}, {ny, nx, nz}, {px, ny, nz}};
+  const auto surface = octahedron(Vec3(0.2, 0.2, 0.2), r);
   const double inner = 4.0 / 3.0 * r * r * r;
-  expect_volumes(cut(octahedron), {inner, kTetVolume - inner});
+  expect_volumes(cut_one_tet(surface), {inner, kTetVolume - inner});
   // With one face missing the surface is open and the material stays in one piece.
-  expect_volumes(cut({octahedron.begin(), octahedron.end() - 1}), {kTetVolume});
+  expect_volumes(cut_one_tet({surface.begin(), surface.end() - 1}), {kTetVolume});
 }
 
 TEST(CellComplex, CutThroughAnEdgeAndAVertex) {
   // The plane x = y contains the tet's edge from (0,0,0) to (0,0,1) and halves the tet.
-  const Tri diagonal{Vec3(-1, -1, -1), Vec3(2, 2, -1), Vec3(0.5, 0.5, 5)};
-  expect_volumes(cut({diagonal}), {kTetVolume / 2, kTetVolume / 2});
+  expect_volumes(cut_one_tet({tri(Vec3(-1, -1, -1), Vec3(2, 2, -1), Vec3(0.5, 0.5, 5))}), {kTetVolume / 2, kTetVolume / 2});
   // A cut touching the tet only at its corner (1,0,0) changes nothing.
-  expect_volumes(cut({{Vec3(1, 0, 0), Vec3(2, 1, 0), Vec3(2, 0, 1)}}), {kTetVolume});
+  expect_volumes(cut_one_tet({tri(Vec3(1, 0, 0), Vec3(2, 1, 0), Vec3(2, 0, 1))}), {kTetVolume});
   // A cut along the tet's face x = 0 changes nothing inside the tet.
-  expect_volumes(cut({covering(0, 0.0)}), {kTetVolume});
+  expect_volumes(cut_one_tet({covering(0, 0.0)}), {kTetVolume});
 }
 
 TEST(CellComplex, RepeatedAndOverlappingCoplanarCuts) {
   const double top = 0.5 * 0.5 * 0.5 / 6;
-  const Tri full = covering(2, 0.5);
-  expect_volumes(cut({full, full, full}), {top, kTetVolume - top});
+  const CutTriangle full = covering(2, 0.5);
+  expect_volumes(cut_one_tet({full, full, full}), {top, kTetVolume - top});
   // Two coplanar triangles that only together cover the tet's section at z = 0.5.
-  const Tri left{Vec3(-1, -1, 0.5), Vec3(3, -1, 0.5), Vec3(-1, 3, 0.5)};
-  const Tri right{Vec3(3, 3, 0.5), Vec3(-1, 3, 0.5), Vec3(3, -1, 0.5)};
-  expect_volumes(cut({{Vec3(-1, -1, 0.5), Vec3(0.3, -1, 0.5), Vec3(-1, 2, 0.5)}, right}), {kTetVolume});
-  expect_volumes(cut({left, right}), {top, kTetVolume - top});
+  const CutTriangle left = tri(Vec3(-1, -1, 0.5), Vec3(3, -1, 0.5), Vec3(-1, 3, 0.5));
+  const CutTriangle right = tri(Vec3(3, 3, 0.5), Vec3(-1, 3, 0.5), Vec3(3, -1, 0.5));
+  expect_volumes(cut_one_tet({tri(Vec3(-1, -1, 0.5), Vec3(0.3, -1, 0.5), Vec3(-1, 2, 0.5)), right}), {kTetVolume});
+  expect_volumes(cut_one_tet({left, right}), {top, kTetVolume - top});
 }
 
 TEST(CellComplex, CutEndingExactlyOnTheTetFaces) {
   // A triangle whose corners lie on the tet's edges: it cuts off the corner at the origin exactly.
   const double s = 0.25;
-  expect_volumes(cut({{Vec3(s, 0, 0), Vec3(0, s, 0), Vec3(0, 0, s)}}), {kTetVolume - s * s * s / 6, s * s * s / 6});
+  expect_volumes(cut_one_tet({tri(Vec3(s, 0, 0), Vec3(0, s, 0), Vec3(0, 0, s))}),
+                 {kTetVolume - s * s * s / 6, s * s * s / 6});
 }
 
-// Random soups: piece volumes add up to the tet volume and do not depend on triangle order.
-class RandomSoup : public ::testing::TestWithParam<int> {};
+TEST(CellComplex, CoveringIsCountedOncePerTriangleWithItsOrientation) {
+  // The same plane from both sides and twice: the winding jump across the facet adds up.
+  Complex c(one_tet());
+  const CutTriangle up = covering(2, 0.5);
+  const CutTriangle down{up.a, up.c, up.b, 1};
+  c.insert({up, up, down, up});
+  int covered = 0;
+  for (const Facet& f : c.complex.facets()) {
+    if (!f.covered()) continue;
+    ++covered;
+    const int sign = geometry::normal_component_sign(c.registry.plane(f.plane), 2);
+    EXPECT_EQ(f.winding * sign, 2);
+    EXPECT_EQ(f.cut, 0);
+  }
+  EXPECT_EQ(covered, 1);
+}
 
-TEST_P(RandomSoup, VolumeIsConservedAndOrderDoesNotMatter) {
-  std::mt19937_64 rng(static_cast<std::uint64_t>(GetParam()));
-  std::uniform_real_distribution<double> coord(-0.3, 1.0);
-  const int count = 3 + GetParam() % 6;
-  std::vector<Tri> soup;
-  for (int i = 0; i < count; ++i) {
-    soup.push_back({Vec3(coord(rng), coord(rng), coord(rng)), Vec3(coord(rng), coord(rng), coord(rng)),
-                    Vec3(coord(rng), coord(rng), coord(rng))});
+// A cut along an interior face of a mesh separates the two tets that share it.
+TEST(CellComplex, CutAlongASharedFaceCoversItForBothTets) {
+  // Two tets sharing the face z = 0 triangle (0,0,0), (1,0,0), (0,1,0).
+  Points p(5, 3);
+  p << 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, -1;
+  Tets t(2, 4);
+  t << 0, 1, 2, 3, 0, 2, 1, 4;
+  Complex c(TetMesh(p, t));
+  c.insert({covering(2, 0.0)});
+  int covered = 0;
+  for (const Facet& f : c.complex.facets()) {
+    if (!f.covered()) continue;
+    ++covered;
+    EXPECT_TRUE(is_cell(f.front) && is_cell(f.back));
+    EXPECT_NE(c.complex.cells()[f.front].tet, c.complex.cells()[f.back].tet);
+    EXPECT_GE(f.mesh_face, 0);
   }
+  EXPECT_GE(covered, 1);
+}
+
+struct Soup {
+  std::vector<CutTriangle> triangles;
+};
+
+Soup random_soup(std::mt19937_64& rng, int count, double lo, double hi) {
+  std::uniform_real_distribution<double> coord(lo, hi);
+  Soup soup;
+  const auto point = [&] { return Vec3(coord(rng), coord(rng), coord(rng)); };
+  for (int i = 0; i < count; ++i) soup.triangles.push_back({point(), point(), point(), i});
   // Degenerate extras: a repeat, and a triangle sharing a corner and an edge with another.
-  soup.push_back(soup[0]);
-  soup.push_back({soup[1].a, soup[1].b, Vec3(coord(rng), coord(rng), coord(rng))});
-  const std::vector<double> volumes = cut(soup);
-  double total = 0;
-  for (const double v : volumes) {
-    EXPECT_GT(v, 0);
-    total += v;
-  }
-  EXPECT_NEAR(total, kTetVolume, 1e-12 * kTetVolume);
-  std::shuffle(soup.begin(), soup.end(), rng);
-  const std::vector<double> shuffled = cut(soup);
+  soup.triangles.push_back(soup.triangles[0]);
+  soup.triangles.push_back({soup.triangles[1].a, soup.triangles[1].b, point(), count + 1});
+  return soup;
+}
+
+double total(const std::vector<double>& v) { return std::accumulate(v.begin(), v.end(), 0.0); }
+
+// Random soups in one tet: piece volumes add up to the tet volume and do not depend on order.
+class RandomSoupInOneTet : public ::testing::TestWithParam<int> {};
+
+TEST_P(RandomSoupInOneTet, VolumeIsConservedAndOrderDoesNotMatter) {
+  std::mt19937_64 rng(static_cast<std::uint64_t>(GetParam()));
+  Soup soup = random_soup(rng, 3 + GetParam() % 6, -0.3, 1.0);
+  Complex first(one_tet());
+  first.insert(soup.triangles, true);
+  const std::vector<double> volumes = first.component_volumes();
+  for (const double v : volumes) EXPECT_GT(v, 0);
+  EXPECT_NEAR(total(volumes), kTetVolume, 1e-12 * kTetVolume);
+  std::shuffle(soup.triangles.begin(), soup.triangles.end(), rng);
+  Complex second(one_tet());
+  second.insert(soup.triangles);
+  const std::vector<double> shuffled = second.component_volumes();
   ASSERT_EQ(shuffled.size(), volumes.size());
   for (std::size_t i = 0; i < volumes.size(); ++i) EXPECT_NEAR(shuffled[i], volumes[i], 1e-13);
 }
 
-INSTANTIATE_TEST_SUITE_P(Seeds, RandomSoup, ::testing::Range(1, 201));
+INSTANTIATE_TEST_SUITE_P(Seeds, RandomSoupInOneTet, ::testing::Range(1, 101));
+
+// Random soups across a 2x2x2 grid of 5-tet cubes: the complex stays valid across shared faces,
+// edges and vertices, and the tets' components add up to the box.
+class RandomSoupInAGrid : public ::testing::TestWithParam<int> {};
+
+TEST_P(RandomSoupInAGrid, ComplexStaysValidAndVolumeIsConserved) {
+  std::mt19937_64 rng(static_cast<std::uint64_t>(1000 + GetParam()));
+  Soup soup = random_soup(rng, 2 + GetParam() % 4, -0.2, 1.2);
+  // Triangles through grid nodes and along grid faces, the degenerate cases of a structured mesh.
+  soup.triangles.push_back(tri(Vec3(0.5, 0.5, 0.5), Vec3(1, 0, 0.5), Vec3(0, 1, 0.25), 100));
+  soup.triangles.push_back(tri(Vec3(0.5, -1, -1), Vec3(0.5, 3, -1), Vec3(0.5, 0.75, 0.9), 101));
+  Complex c(make_grid(Box{}, {2, 2, 2}, 5));
+  c.insert(soup.triangles, true);
+  const std::vector<double> volumes = c.component_volumes();
+  for (const double v : volumes) EXPECT_GT(v, 0);
+  EXPECT_NEAR(total(volumes), 1.0, 1e-12);
+}
+
+INSTANTIATE_TEST_SUITE_P(Seeds, RandomSoupInAGrid, ::testing::Range(1, 41));
 
 // The paper's Figure 2: one tet sliced by 50 random triangles, many of which only partly enter it.
 TEST(CellComplex, Figure2FiftyRandomTriangles) {
@@ -162,7 +274,7 @@ TEST(CellComplex, Figure2FiftyRandomTriangles) {
   std::mt19937_64 rng(2007);
   std::uniform_real_distribution<double> unit(0, 1);
   std::normal_distribution<double> gauss;
-  std::vector<Tri> soup;
+  std::vector<CutTriangle> soup;
   for (int i = 0; i < 50; ++i) {
     double w[4];
     double sum = 0;
@@ -178,14 +290,13 @@ TEST(CellComplex, Figure2FiftyRandomTriangles) {
       const double angle = turn + 2 * M_PI * k / 3;
       corners[k] = centre + radius * (std::cos(angle) * u + std::sin(angle) * v);
     }
-    soup.push_back({corners[0], corners[1], corners[2]});
+    soup.push_back({corners[0], corners[1], corners[2], i});
   }
-  const std::vector<double> volumes = cut(soup);
-  double total = 0;
-  for (const double v : volumes) total += v;
-  EXPECT_NEAR(total, kTetVolume, 1e-12 * kTetVolume);
+  Complex c(one_tet());
+  c.insert(soup);
+  const std::vector<double> volumes = c.component_volumes();
+  EXPECT_NEAR(total(volumes), kTetVolume, 1e-12 * kTetVolume);
   EXPECT_GT(volumes.size(), 1000u);
-  std::printf("Figure 2: %zu pieces\n", volumes.size());
 }
 
 }  // namespace

@@ -1,0 +1,84 @@
+#include "components/material_components.hpp"
+
+#include <tbb/parallel_for.h>
+
+#include <numeric>
+
+namespace tetcut::components {
+namespace {
+
+using cells::CellComplex;
+using cells::CellId;
+
+// Components of one tet. Writes its cells' entries only, so tets can run in parallel.
+void tet_components(const CellComplex& complex, Index tet, MaterialComponents* result) {
+  if (!complex.refined(tet)) {
+    result->count[tet] = complex.tet_material(tet) ? 1 : 0;
+    return;
+  }
+  const auto& cells = complex.cells();
+  const auto& facets = complex.facets();
+  std::vector<CellId> members;
+  for (CellId c = complex.first_cell(tet); c >= 0; c = cells[c].next_in_tet) members.push_back(c);
+  // Local union-find over the tet's cells; cell_component holds each cell's local index meanwhile.
+  std::vector<std::int32_t> parent(members.size());
+  std::iota(parent.begin(), parent.end(), 0);
+  for (std::size_t i = 0; i < members.size(); ++i) result->cell_component[members[i]] = static_cast<std::int32_t>(i);
+  const auto find = [&](std::int32_t x) {
+    while (parent[x] != x) x = parent[x] = parent[parent[x]];
+    return x;
+  };
+  for (const CellId c : members) {
+    if (!cells[c].material) continue;
+    for (const cells::FacetId f : cells[c].facets) {
+      const cells::Facet& facet = facets[f];
+      if (facet.covered() || facet.front != c) continue;  // each facet once, from its front cell
+      const cells::Side other = facet.back;
+      if (!cells::is_cell(other) || cells[other].tet != tet || !cells[other].material) continue;
+      const std::int32_t a = find(result->cell_component[c]), b = find(result->cell_component[other]);
+      if (a != b) parent[std::max(a, b)] = std::min(a, b);
+    }
+  }
+  const Vec3 origin = complex.mesh().rest().row(complex.mesh().tets()(tet, 0)).transpose();
+  std::vector<std::int32_t> label(members.size(), -1);
+  std::int32_t count = 0;
+  for (std::size_t i = 0; i < members.size(); ++i) {
+    const CellId c = members[i];
+    result->cell_volume6[c] = complex.cell_volume6(c, origin);
+    if (!cells[c].material) {
+      result->cell_component[c] = -1;
+      continue;
+    }
+    const std::int32_t root = find(static_cast<std::int32_t>(i));
+    if (label[root] < 0) label[root] = count++;
+    result->cell_component[c] = label[root];
+  }
+  result->count[tet] = count;
+}
+
+}  // namespace
+
+MaterialComponents find_components(const CellComplex& complex) {
+  MaterialComponents result;
+  const Index num_tets = complex.mesh().num_tets();
+  result.count.assign(static_cast<std::size_t>(num_tets), 0);
+  result.cell_component.assign(complex.cells().size(), -1);
+  result.cell_volume6.assign(complex.cells().size(), 0.0);
+  complex.registry().update_positions();
+  tbb::parallel_for(tbb::blocked_range<Index>(0, num_tets, 256), [&](const auto& range) {
+    for (Index t = range.begin(); t != range.end(); ++t) tet_components(complex, t, &result);
+  });
+  return result;
+}
+
+void update_components(const CellComplex& complex, std::span<const Index> tets, MaterialComponents* result) {
+  result->count.resize(static_cast<std::size_t>(complex.mesh().num_tets()), 0);
+  result->cell_component.resize(complex.cells().size(), -1);
+  result->cell_volume6.resize(complex.cells().size(), 0.0);
+  complex.registry().update_positions();
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, tets.size(), 16), [&](const auto& range) {
+    for (std::size_t i = range.begin(); i != range.end(); ++i) tet_components(complex, tets[i], result);
+  });
+}
+
+}  // namespace tetcut::components

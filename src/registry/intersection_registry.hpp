@@ -1,0 +1,111 @@
+#pragma once
+// The intersection registry (paper, Appendix A). Every point the cutter uses is the meeting of three
+// planes, each the supporting plane of a triangle of one big soup: a tet face, a cut triangle, or a
+// virtual triangle through one edge of a cut triangle. The paper writes the virtual triangle as
+// pq∅ with ∅ an unspecified point; here ∅ is p plus a coordinate axis, so the virtual triangle's
+// plane is the "wall" through pq along that axis (geometry/plane.hpp). Mesh nodes are registered as
+// the meeting of three faces of a tet.
+//
+// Nothing is rounded while topology is decided: a point is its three planes plus filtered
+// homogeneous coordinates, and side tests are exact (filter first, GMP when the filter cannot
+// decide). Planes made from the same input doubles are stored once (keyed by those doubles, never
+// by rounded values). Points are never duplicated: the cell complex creates a point only strictly
+// inside one of its edges, where no other point can be, and it recognises a point that a new triple
+// names by an exact side test returning zero.
+
+#include <tetcut/types.hpp>
+
+#include <array>
+#include <cstdint>
+#include <functional>
+#include <initializer_list>
+#include <unordered_map>
+#include <vector>
+
+#include "geometry/plane.hpp"
+
+namespace tetcut::registry {
+
+using PlaneId = std::int32_t;
+using VertexId = std::int32_t;
+
+/// A stored plane and how a requested orientation relates to it: sign +1 when the stored plane's
+/// normal points the requested way, -1 when opposite.
+struct OrientedPlane {
+  PlaneId id = -1;
+  int sign = 1;
+};
+
+struct Vertex {
+  std::array<PlaneId, 3> planes{};
+  geometry::Homogeneous homogeneous{};
+  std::int8_t orientation = 1;  ///< sign of the homogeneous W
+  Index node = -1;              ///< the mesh node, for input points; -1 for intersections
+};
+
+class IntersectionRegistry {
+ public:
+  /// `rest` holds the mesh nodes' rest positions (|V| x 3); it must outlive the registry.
+  explicit IntersectionRegistry(const Points& rest) : rest_(&rest) {}
+
+  /// Stores a plane without looking for an equal one.
+  PlaneId add_plane(const geometry::Plane& plane);
+  /// The plane through a, b, c (not collinear), oriented by (b - a) x (c - a). The same three
+  /// points in any order give the same stored plane.
+  OrientedPlane triangle_plane(const Vec3& a, const Vec3& b, const Vec3& c);
+  /// The wall through p and q along `axis`, oriented so that `inner` (off the wall) is on its
+  /// positive side. The same edge and axis give the same stored plane.
+  OrientedPlane wall(const Vec3& p, const Vec3& q, int axis, const Vec3& inner);
+
+  /// Registers the point where a, b and c meet; they must meet in exactly one point.
+  VertexId add_point(PlaneId a, PlaneId b, PlaneId c);
+  /// Registers mesh node `node`, which lies on the three planes a, b, c.
+  VertexId add_node(Index node, PlaneId a, PlaneId b, PlaneId c);
+
+  /// Sign (+1, 0, -1) of plane q at vertex v. Exact. Memoised for the planes given to begin_memo.
+  int side(VertexId v, PlaneId q) const;
+
+  /// Coordinates of v, correctly rounded or nearly (geometry::tpi_coordinates). For output only.
+  const Vec3& position(VertexId v) const;
+  /// Computes every missing position, in parallel, so position() is then a plain read.
+  void update_positions() const;
+
+  const geometry::Plane& plane(PlaneId p) const { return planes_[p]; }
+  const Vertex& vertex(VertexId v) const { return vertices_[v]; }
+  PlaneId num_planes() const { return static_cast<PlaneId>(planes_.size()); }
+  VertexId num_vertices() const { return static_cast<VertexId>(vertices_.size()); }
+
+  /// Memoises side tests against up to four planes (one cut triangle's plane and walls) until
+  /// end_memo: the splits of one insertion ask the same vertex many times.
+  void begin_memo(std::initializer_list<PlaneId> planes);
+  void end_memo();
+
+ private:
+  int compute_side(VertexId v, PlaneId q) const;
+  void compute_position(VertexId v) const;
+
+  struct PointsKey {
+    std::array<double, 9> coordinates;
+    bool operator==(const PointsKey&) const = default;
+  };
+  struct KeyHash {
+    std::size_t operator()(const PointsKey& key) const;
+  };
+
+  const Points* rest_;
+  std::vector<geometry::Plane> planes_;
+  std::vector<Vertex> vertices_;
+  mutable std::vector<Vec3> positions_;
+  mutable std::vector<std::uint8_t> has_position_;
+  std::unordered_map<PointsKey, PlaneId, KeyHash> triangle_planes_;
+  std::unordered_map<PointsKey, PlaneId, KeyHash> walls_;
+
+  // Memo: per vertex, the insertion stamp and the four sides (kUnknown until computed).
+  static constexpr std::int8_t kUnknown = 2;
+  std::array<PlaneId, 4> memo_planes_{-1, -1, -1, -1};
+  std::uint32_t memo_stamp_ = 0;
+  mutable std::vector<std::uint32_t> memo_vertex_stamp_;
+  mutable std::vector<std::array<std::int8_t, 4>> memo_sides_;
+};
+
+}  // namespace tetcut::registry
