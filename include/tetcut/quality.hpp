@@ -30,7 +30,14 @@ struct SurfaceStats {
   Index num_boundary_edges = 0;      ///< edges with one incident triangle
   Index num_nonmanifold_edges = 0;   ///< edges with three or more incident triangles
   Index num_degenerate_triangles = 0;///< triangles with (exactly) collinear corners
+  /// Edges not used equally often in each direction: boundary edges, and edges where the
+  /// orientation of the incident triangles is inconsistent.
+  Index num_unbalanced_edges = 0;
   bool closed = false;               ///< every edge has exactly two incident triangles
+  /// Every edge is used as often in one direction as in the other: the surface is closed and
+  /// consistently oriented, though it may be non-manifold (as a cut mesh's material surface may be
+  /// where sheets touch). Implies an even number of triangles at every edge.
+  bool watertight = false;
 };
 
 SurfaceStats measure_surface(const TriangleSurface& surface);

@@ -119,6 +119,10 @@ class CellComplex {
   bool refined(Index tet) const { return first_cell_[tet] >= 0; }
   /// First cell of a refined tet (then follow Cell::next_in_tet), or -1.
   CellId first_cell(Index tet) const { return first_cell_[tet]; }
+  /// Appends the points that refined tets put strictly inside mesh edge `mesh_edge`, in order from
+  /// node `from` to node `to` (its two nodes). A face of an unrefined tet is the polygon of its
+  /// three nodes and these points. O(points on the edge squared).
+  void mesh_edge_points(Index mesh_edge, Index from, Index to, std::vector<VertexId>* out) const;
   /// Facets on a mesh face (then follow Facet::next_on_mesh_face), or -1 when none exist yet.
   FacetId first_facet_on_face(Index face) const { return face_first_facet_[face]; }
 
@@ -142,7 +146,8 @@ class CellComplex {
   /// every facet's corners lie on its plane and each edge on both planes of its line; edges and
   /// facets list each other; every cell is closed (each directed edge of its outward facets used
   /// once each way), convex (every vertex on the inner side of each facet), with positive volume;
-  /// front and back agree with the cells' facet lists. O(total size squared per cell).
+  /// front and back agree with the cells' facet lists; no edge or point is stored twice; every
+  /// covered facet lies inside the triangle that covered it. O(total size squared per cell).
   std::string validate() const;
 
  private:
@@ -206,6 +211,12 @@ class CellComplex {
   };
   Insertion insertion_;
   std::int32_t next_stamp_ = 0;
+  // Plane and inward walls of each inserted triangle, by cut id (for validate()).
+  struct InsertedTriangle {
+    registry::OrientedPlane plane;
+    std::array<registry::OrientedPlane, 3> walls;
+  };
+  std::vector<InsertedTriangle> inserted_;
   std::vector<std::int32_t> tet_touch_stamp_;  // per tet: last insertion that reported it
 };
 

@@ -271,11 +271,6 @@ std::array<T, 4> cramer(const T (&n)[3][3], const T (&minus_d)[3]) {
   return h;
 }
 
-// Largest relative error of rounded coordinates that we accept without the exact evaluation:
-// 2^-50 of the point's largest coordinate (a few units in the last place). Output geometry only;
-// no decision depends on it.
-constexpr double kCoordinateTolerance = 0x1p-50;
-
 }  // namespace
 
 Homogeneous tpi_homogeneous(const Plane& a, const Plane& b, const Plane& c) {
@@ -323,6 +318,12 @@ Vec3 tpi_coordinates(const Plane& a, const Plane& b, const Plane& c, const Homog
     accurate = std::isfinite(magnitude) && bound <= kCoordinateTolerance * magnitude;
   }
   if (accurate) return x;
+  const std::array<mpq_class, 3> exact = tpi_exact(a, b, c);
+  for (int k = 0; k < 3; ++k) x[k] = exact[k].get_d();
+  return x;
+}
+
+std::array<mpq_class, 3> tpi_exact(const Plane& a, const Plane& b, const Plane& c) {
   ScaledInputs scaled;
   scaled.include(a);
   scaled.include(b);
@@ -332,12 +333,17 @@ Vec3 tpi_coordinates(const Plane& a, const Plane& b, const Plane& c, const Homog
   const auto ec = ExactPlanes::coefficients(c, scaled);
   const mpz_class n[3][3] = {{ea[0], ea[1], ea[2]}, {eb[0], eb[1], eb[2]}, {ec[0], ec[1], ec[2]}};
   const mpz_class minus_d[3] = {-ea[3], -eb[3], -ec[3]};
-  const auto exact = cramer(n, minus_d);
+  const auto h = cramer(n, minus_d);
+  std::array<mpq_class, 3> x;
   for (int k = 0; k < 3; ++k) {
-    mpq_class value(exact[k], exact[3]);
-    value.canonicalize();  // GMP's rational functions need a positive, reduced denominator
+    x[k] = mpq_class(h[k], h[3]);
+    x[k].canonicalize();  // GMP's rational functions need a positive, reduced denominator
     // The exact planes pass through the inputs scaled by 2^scale, and so does their meeting point.
-    x[k] = std::ldexp(value.get_d(), -scaled.scale);
+    if (scaled.scale >= 0) {
+      mpq_div_2exp(x[k].get_mpq_t(), x[k].get_mpq_t(), static_cast<mp_bitcnt_t>(scaled.scale));
+    } else {
+      mpq_mul_2exp(x[k].get_mpq_t(), x[k].get_mpq_t(), static_cast<mp_bitcnt_t>(-scaled.scale));
+    }
   }
   return x;
 }

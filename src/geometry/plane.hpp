@@ -17,6 +17,8 @@
 
 #include <tetcut/types.hpp>
 
+#include <gmpxx.h>
+
 #include <array>
 #include <cstdint>
 
@@ -101,10 +103,20 @@ int side_of_tpi(const Plane& a, const Plane& b, const Plane& c, const Homogeneou
 /// explicit_homogeneous) and exact otherwise.
 int side_of_point(const Plane& q, const Vec3& x, const Homogeneous& h);
 
+/// Largest error of a rounded coordinate from tpi_coordinates, relative to the point's largest
+/// coordinate: 2^-50, a few units in the last place. Beyond it the exact evaluation is used.
+/// Output geometry only; no decision depends on it.
+inline constexpr double kCoordinateTolerance = 0x1p-50;
+
 /// Coordinates of the point where a, b and c meet, correctly rounded or nearly so: from the
 /// filtered homogeneous coordinates when their error bound is tiny, otherwise from an exact
 /// rational evaluation. For output and volumes only, never for decisions.
 Vec3 tpi_coordinates(const Plane& a, const Plane& b, const Plane& c);
 Vec3 tpi_coordinates(const Plane& a, const Plane& b, const Plane& c, const Homogeneous& h);
+
+/// Exact rational coordinates of the point where a, b and c meet. Slow (GMP); for the rare
+/// measurements that rounded coordinates cannot settle, such as the volume of a cell far smaller
+/// than the rounding of its corners.
+std::array<mpq_class, 3> tpi_exact(const Plane& a, const Plane& b, const Plane& c);
 
 }  // namespace tetcut::geometry

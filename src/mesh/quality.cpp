@@ -72,7 +72,8 @@ SurfaceStats measure_surface(const TriangleSurface& surface) {
     s.bbox_min = v.colwise().minCoeff().transpose();
     s.bbox_max = v.colwise().maxCoeff().transpose();
   }
-  std::vector<std::array<Index, 2>> edges;
+  // Each edge use as (lower id, higher id, +1 when run from lower to higher, else -1).
+  std::vector<std::array<Index, 3>> edges;
   edges.reserve(static_cast<std::size_t>(surface.num_triangles()) * 3);
   for (Index f = 0; f < surface.num_triangles(); ++f) {
     const Vec3 a = v.row(surface.triangles(f, 0)), b = v.row(surface.triangles(f, 1)), c = v.row(surface.triangles(f, 2));
@@ -81,21 +82,23 @@ SurfaceStats measure_surface(const TriangleSurface& surface) {
     s.enclosed_volume += a.dot(b.cross(c)) / 6.0;
     if (geometry::collinear(a, b, c)) ++s.num_degenerate_triangles;
     for (int k = 0; k < 3; ++k) {
-      Index i = surface.triangles(f, k), j = surface.triangles(f, (k + 1) % 3);
-      if (i > j) std::swap(i, j);
-      edges.push_back({i, j});
+      const Index i = surface.triangles(f, k), j = surface.triangles(f, (k + 1) % 3);
+      edges.push_back(i < j ? std::array<Index, 3>{i, j, 1} : std::array<Index, 3>{j, i, -1});
     }
   }
   std::sort(edges.begin(), edges.end());
   for (std::size_t i = 0; i < edges.size();) {
     std::size_t j = i;
-    while (j < edges.size() && edges[j] == edges[i]) ++j;
+    Index balance = 0;
+    while (j < edges.size() && edges[j][0] == edges[i][0] && edges[j][1] == edges[i][1]) balance += edges[j++][2];
     const std::size_t count = j - i;
     if (count == 1) ++s.num_boundary_edges;
     if (count > 2) ++s.num_nonmanifold_edges;
+    if (balance != 0) ++s.num_unbalanced_edges;
     i = j;
   }
   s.closed = surface.num_triangles() > 0 && s.num_boundary_edges == 0 && s.num_nonmanifold_edges == 0;
+  s.watertight = surface.num_triangles() > 0 && s.num_unbalanced_edges == 0;
   return s;
 }
 

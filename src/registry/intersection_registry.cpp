@@ -110,6 +110,13 @@ int IntersectionRegistry::compute_side(VertexId v, PlaneId q) const {
                                vertex.homogeneous, vertex.orientation, planes_[q]);
 }
 
+int IntersectionRegistry::side(VertexId v, const Plane& q) const {
+  const Vertex& vertex = vertices_[v];
+  if (vertex.node >= 0) return geometry::side_of_point(q, rest_->row(vertex.node).transpose(), vertex.homogeneous);
+  return geometry::side_of_tpi(planes_[vertex.planes[0]], planes_[vertex.planes[1]], planes_[vertex.planes[2]],
+                               vertex.homogeneous, vertex.orientation, q);
+}
+
 int IntersectionRegistry::side(VertexId v, PlaneId q) const {
   int slot = 0;
   while (slot < 4 && memo_planes_[slot] != q) ++slot;
@@ -163,6 +170,16 @@ const Vec3& IntersectionRegistry::position(VertexId v) const {
   if (!has_position_[v]) compute_position(v);
   return positions_[v];
 }
+
+std::array<mpq_class, 3> IntersectionRegistry::exact_position(VertexId v) const {
+  const Vertex& vertex = vertices_[v];
+  if (vertex.node >= 0) {
+    return {mpq_class((*rest_)(vertex.node, 0)), mpq_class((*rest_)(vertex.node, 1)), mpq_class((*rest_)(vertex.node, 2))};
+  }
+  return geometry::tpi_exact(planes_[vertex.planes[0]], planes_[vertex.planes[1]], planes_[vertex.planes[2]]);
+}
+
+double IntersectionRegistry::position_tolerance() { return geometry::kCoordinateTolerance; }
 
 void IntersectionRegistry::update_positions() const {
   if (positions_.size() < vertices_.size()) {

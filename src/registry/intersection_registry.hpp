@@ -64,9 +64,16 @@ class IntersectionRegistry {
 
   /// Sign (+1, 0, -1) of plane q at vertex v. Exact. Memoised for the planes given to begin_memo.
   int side(VertexId v, PlaneId q) const;
+  /// The same for a plane that is not stored in the registry. Exact; not memoised.
+  int side(VertexId v, const geometry::Plane& q) const;
 
   /// Coordinates of v, correctly rounded or nearly (geometry::tpi_coordinates). For output only.
   const Vec3& position(VertexId v) const;
+  /// Exact rational coordinates of v (slow: for measurements rounding cannot settle).
+  std::array<mpq_class, 3> exact_position(VertexId v) const;
+  /// Bound on the error of each rounded coordinate of position(), relative to the position's
+  /// largest coordinate (see geometry::tpi_coordinates).
+  static double position_tolerance();
   /// Computes every missing position, in parallel, so position() is then a plain read.
   void update_positions() const;
 

@@ -36,13 +36,15 @@ struct Complex {
   TetMesh mesh;
   registry::IntersectionRegistry registry;
   CellComplex complex;
+  std::int32_t next_id = 0;
 
   // Inserts every triangle with all tets as candidates; validates after each when asked.
   void insert(const std::vector<CutTriangle>& triangles, bool validate_each = false) {
     std::vector<Index> all(static_cast<std::size_t>(mesh.num_tets()));
     std::iota(all.begin(), all.end(), 0);
     std::vector<Index> touched;
-    for (const CutTriangle& t : triangles) {
+    for (CutTriangle t : triangles) {
+      t.id = next_id++;  // ids name the triangles for validate()
       complex.insert_triangle(t, all, &touched);
       if (validate_each) {
         ASSERT_EQ(complex.validate(), "");
@@ -166,6 +168,14 @@ TEST(CellComplex, RepeatedAndOverlappingCoplanarCuts) {
   expect_volumes(cut_one_tet({left, right}), {top, kTetVolume - top});
 }
 
+// Regression: a thin horizontal triangle pointing at the tet from beside it. Each of its walls has
+// part of the tet on its inner side, but the part inside the first wall lies outside the third;
+// an early version split that part by the triangle's plane anyway and covered a facet outside the
+// triangle, making a second component.
+TEST(CellComplex, ATriangleBesideTheTetCutsNothing) {
+  expect_volumes(cut_one_tet({tri(Vec3(-0.05, 0.3, 0.2), Vec3(-1, 0.25, 0.2), Vec3(-1, 0.35, 0.2))}), {kTetVolume});
+}
+
 TEST(CellComplex, CutEndingExactlyOnTheTetFaces) {
   // A triangle whose corners lie on the tet's edges: it cuts off the corner at the origin exactly.
   const double s = 0.25;
@@ -185,7 +195,7 @@ TEST(CellComplex, CoveringIsCountedOncePerTriangleWithItsOrientation) {
     ++covered;
     const int sign = geometry::normal_component_sign(c.registry.plane(f.plane), 2);
     EXPECT_EQ(f.winding * sign, 2);
-    EXPECT_EQ(f.cut, 0);
+    EXPECT_EQ(f.cut, 0);  // the first triangle that covered it
   }
   EXPECT_EQ(covered, 1);
 }

@@ -1,0 +1,101 @@
+#pragma once
+// Cutting a tet mesh by triangle soups (Sifakis, Der, Fedkiw 2007, made exact).
+//
+//   tetcut::Cutter cutter(mesh);
+//   cutter.cut(soup);                      // any number of batches, in rest space
+//   const tetcut::CutResult r = cutter.result();
+//   r.mesh.mesh          // the simulation mesh: one copy of a tet per material component
+//   r.surface.surface    // the material surface, embedded in the copies
+//
+// Cut triangles may intersect each other and the mesh in any way: through nodes, along edges and
+// faces, coplanar and overlapping, partly inside a tet, closed inside one tet. Every topological
+// decision is an exact predicate; coordinates are rounded for output only. Zero-area triangles
+// are skipped and reported.
+
+#include <tetcut/surface.hpp>
+#include <tetcut/tet_mesh.hpp>
+
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+namespace tetcut {
+
+/// The simulation mesh after cutting. Each material component of an input tet has its own copy
+/// of the tet, with the tet's rest positions, so no element is smaller or worse shaped than an
+/// input element. Copies whose shared face holds common material share that face's nodes.
+struct CutMesh {
+  /// Nodes and tet copies. Input node n keeps id n; duplicated nodes follow. Each input tet's first
+  /// copy comes first, in input order (so, when every tet holds material, tet t's first copy is
+  /// t); further copies follow.
+  TetMesh mesh;
+  std::vector<Index> node_parent;           ///< per node: the input node it copies
+  std::vector<Index> tet_parent;            ///< per copy: the input tet it copies
+  std::vector<Index> tet_piece;             ///< per copy: its piece (pieces by volume, largest first)
+  std::vector<double> tet_material_volume;  ///< per copy: volume of the material it holds
+  std::vector<double> piece_volumes;        ///< per piece, largest first
+
+  Index num_pieces() const { return static_cast<Index>(piece_volumes.size()); }
+};
+
+/// The boundary of the material: both sides of every cut and the uncut outer boundary, as
+/// triangles oriented outward. Each vertex is embedded in one tet copy by barycentric weights, so
+/// it follows the simulation mesh as it deforms.
+struct MaterialSurface {
+  TriangleSurface surface;  ///< rest positions
+  /// Per vertex: the tet copy (a CutMesh tet id) it is embedded in, and its barycentric weights
+  /// (|V| x 4, summing to one) with respect to that copy's four nodes.
+  std::vector<Index> vertex_tet;
+  Eigen::Matrix<double, Eigen::Dynamic, 4, Eigen::RowMajor> vertex_weights;
+  /// Per triangle: the cut triangle it lies on (numbered over all batches, in order), or -1 - f
+  /// for input mesh face f (TetAdjacency numbering) on the outer boundary.
+  std::vector<std::int64_t> triangle_source;
+  /// Per triangle: the tet copy whose material it bounds.
+  std::vector<Index> triangle_tet;
+
+  /// Vertex positions for the given positions of the cut mesh's nodes (|V'| x 3), e.g. deformed.
+  Points positions(const CutMesh& mesh, const Points& nodes) const;
+};
+
+struct CutResult {
+  CutMesh mesh;
+  MaterialSurface surface;
+};
+
+/// What one batch did.
+struct CutBatchReport {
+  Index triangles = 0;                     ///< triangles in the batch
+  std::vector<Index> degenerate;           ///< zero-area triangles (collinear corners), skipped
+  Index tets_touched = 0;                  ///< input tets whose material changed
+  std::vector<Index> touched;              ///< those tets, in increasing order
+};
+
+/// The cut state of one mesh: the intersection registry and the cell complex. Batches of
+/// triangles accumulate; each changes only the tets it touches.
+class Cutter {
+ public:
+  /// Takes the mesh to cut (its rest positions). Nothing is precomputed per tet beyond a
+  /// bounding-box hierarchy: O(T log T).
+  explicit Cutter(TetMesh mesh);
+  ~Cutter();
+  Cutter(Cutter&&) noexcept;
+  Cutter& operator=(Cutter&&) noexcept;
+
+  /// Cuts by a batch of triangles given in rest positions. Throws Error(kInvalidInput) naming the
+  /// triangle when a coordinate is not finite (nothing is changed then). Cost: proportional to the
+  /// tets the batch touches and their cells, plus O(log T) per triangle.
+  CutBatchReport cut(const TriangleSurface& batch);
+
+  /// The simulation mesh and material surface for all batches so far. O(T + refined cells).
+  CutResult result() const;
+
+  const TetMesh& input() const;
+  /// Cut triangles inserted so far (degenerate ones included in the numbering).
+  std::int64_t num_cut_triangles() const;
+
+ private:
+  struct State;
+  std::unique_ptr<State> state_;
+};
+
+}  // namespace tetcut
