@@ -123,6 +123,9 @@ class CellComplex {
   /// node `from` to node `to` (its two nodes). A face of an unrefined tet is the polygon of its
   /// three nodes and these points. O(points on the edge squared).
   void mesh_edge_points(Index mesh_edge, Index from, Index to, std::vector<VertexId>* out) const;
+  /// The registry plane of a mesh face (oriented by its ascending node ids), or -1 when no tet
+  /// around it is refined yet.
+  PlaneId face_plane_id(Index face) const { return face_plane_[face]; }
   /// Facets on a mesh face (then follow Facet::next_on_mesh_face), or -1 when none exist yet.
   FacetId first_facet_on_face(Index face) const { return face_first_facet_[face]; }
 

@@ -1,8 +1,13 @@
 #pragma once
 // A double together with a bound on its absolute error: the floating-point filter behind every
-// predicate on implicit points. Each operation adds the rounding error it may commit, so after
-// any polynomial evaluation |value - exact| <= error holds (up to the relative slack
-// kErrorSlack, which absorbs the rounding of the error arithmetic itself).
+// predicate on implicit points. Each operation adds the rounding error it actually committed,
+// computed exactly by an error-free transformation (Knuth's TwoSum, Dekker's TwoProduct), so after
+// any polynomial evaluation |value - exact| <= error (up to the relative slack kErrorSlack, which
+// absorbs the rounding of the error arithmetic itself).
+//
+// Tracking the actual error rather than a bound like eps * |value| matters for degenerate input:
+// when every operation is exact (grid-aligned coordinates, points exactly on planes), the error
+// stays exactly zero and a zero result is certain, so the exact GMP path is not needed.
 
 #include <cmath>
 #include <limits>
@@ -17,28 +22,51 @@ struct Approx {
   static Approx exact(double v) { return {v, 0}; }
 };
 
-// Unit roundoff doubled, so that a bound on |result| stated in terms of the rounded result stays safe.
-inline constexpr double kRoundoff = std::numeric_limits<double>::epsilon();
-// Underflow can lose up to the smallest normal number per product; adding it keeps the bound true
-// for tiny coordinates (which then fall through to the exact path).
-inline constexpr double kUnderflow = std::numeric_limits<double>::min();
 // The error terms are themselves rounded (at most a few hundred operations deep, each off by at most
 // one unit roundoff); 2^-40 of relative slack covers that with a wide margin.
 inline constexpr double kErrorSlack = 1.0 + 0x1p-40;
+// Below this magnitude a product may underflow, and Dekker's error term is no longer exact; the
+// smallest normal number bounds what can be lost there.
+inline constexpr double kUnderflowRisk = 0x1p-960;
+inline constexpr double kUnderflow = std::numeric_limits<double>::min();
+
+namespace detail {
+
+// Rounding error of s = a + b, exactly (Knuth's TwoSum; no overflow assumed: a non-finite sum is
+// caught by certain_sign).
+inline double two_sum_error(double a, double b, double s) {
+  const double bb = s - a;
+  return (a - (s - bb)) + (b - bb);
+}
+
+// Rounding error of p = a * b, exactly, by Dekker's splitting (no FMA needed).
+inline double two_product_error(double a, double b, double p) {
+  constexpr double kSplitter = 134217729.0;  // 2^27 + 1
+  const double ca = kSplitter * a, a_hi = ca - (ca - a), a_lo = a - a_hi;
+  const double cb = kSplitter * b, b_hi = cb - (cb - b), b_lo = b - b_hi;
+  return ((a_hi * b_hi - p) + a_hi * b_lo + a_lo * b_hi) + a_lo * b_lo;
+}
+
+}  // namespace detail
 
 inline Approx operator+(Approx a, Approx b) {
   const double v = a.value + b.value;
-  return {v, a.error + b.error + kRoundoff * std::abs(v)};
-}
-inline Approx operator-(Approx a, Approx b) {
-  const double v = a.value - b.value;
-  return {v, a.error + b.error + kRoundoff * std::abs(v)};
+  return {v, a.error + b.error + std::abs(detail::two_sum_error(a.value, b.value, v))};
 }
 inline Approx operator-(Approx a) { return {-a.value, a.error}; }
+inline Approx operator-(Approx a, Approx b) { return a + (-b); }
 inline Approx operator*(Approx a, Approx b) {
   const double v = a.value * b.value;
-  return {v, std::abs(a.value) * b.error + std::abs(b.value) * a.error + a.error * b.error +
-                 kRoundoff * std::abs(v) + kUnderflow};
+  double error = std::abs(a.value) * b.error + std::abs(b.value) * a.error + a.error * b.error;
+  // The propagated error may itself underflow; each product then loses less than the smallest
+  // normal number.
+  if ((a.error > 0 || b.error > 0) && error < kUnderflowRisk) error += kUnderflow;
+  if (std::abs(v) < kUnderflowRisk && a.value != 0 && b.value != 0) {
+    error += kUnderflow;  // Dekker's error term is not exact near underflow
+  } else {
+    error += std::abs(detail::two_product_error(a.value, b.value, v));
+  }
+  return {v, error};
 }
 
 /// The sign of the exact value when the bound decides it, or 2 ("unknown") when it does not,

@@ -301,23 +301,24 @@ Vec3 tpi_coordinates(const Plane& a, const Plane& b, const Plane& c) {
   return tpi_coordinates(a, b, c, tpi_homogeneous(a, b, c));
 }
 
-Vec3 tpi_coordinates(const Plane& a, const Plane& b, const Plane& c, const Homogeneous& h) {
+bool rounded_coordinates(const Homogeneous& h, Vec3* x) {
   const double w = h[3].value;
-  bool accurate = std::isfinite(w) && std::abs(w) > h[3].error * kErrorSlack;
-  Vec3 x;
-  if (accurate) {
-    // |x_k - X/W| <= (err_X + |x_k| err_W) / (|W| - err_W), to first order; accept it when it is tiny
-    // next to the point's largest coordinate.
-    const double scale = std::abs(w) - h[3].error * kErrorSlack;
-    double magnitude = 0, bound = 0;
-    for (int k = 0; k < 3; ++k) {
-      x[k] = h[k].value / w;
-      magnitude = std::max(magnitude, std::abs(x[k]));
-      bound = std::max(bound, (h[k].error + std::abs(x[k]) * h[3].error) * kErrorSlack / scale);
-    }
-    accurate = std::isfinite(magnitude) && bound <= kCoordinateTolerance * magnitude;
+  if (!std::isfinite(w) || !(std::abs(w) > h[3].error * kErrorSlack)) return false;
+  // |x_k - X/W| <= (err_X + |x_k| err_W) / (|W| - err_W), to first order; accept it when it is tiny
+  // next to the point's largest coordinate.
+  const double scale = std::abs(w) - h[3].error * kErrorSlack;
+  double magnitude = 0, bound = 0;
+  for (int k = 0; k < 3; ++k) {
+    (*x)[k] = h[k].value / w;
+    magnitude = std::max(magnitude, std::abs((*x)[k]));
+    bound = std::max(bound, (h[k].error + std::abs((*x)[k]) * h[3].error) * kErrorSlack / scale);
   }
-  if (accurate) return x;
+  return std::isfinite(magnitude) && bound <= kCoordinateTolerance * magnitude;
+}
+
+Vec3 tpi_coordinates(const Plane& a, const Plane& b, const Plane& c, const Homogeneous& h) {
+  Vec3 x;
+  if (rounded_coordinates(h, &x)) return x;
   const std::array<mpq_class, 3> exact = tpi_exact(a, b, c);
   for (int k = 0; k < 3; ++k) x[k] = exact[k].get_d();
   return x;
@@ -344,6 +345,60 @@ std::array<mpq_class, 3> tpi_exact(const Plane& a, const Plane& b, const Plane& 
     } else {
       mpq_mul_2exp(x[k].get_mpq_t(), x[k].get_mpq_t(), static_cast<mp_bitcnt_t>(-scaled.scale));
     }
+  }
+  return x;
+}
+
+ExactPlane exact_plane(const Plane& plane) {
+  ScaledInputs scaled;
+  scaled.include(plane);
+  ExactPlane c = ExactPlanes::coefficients(plane, scaled);
+  // These are the coefficients of the plane through the inputs scaled by 2^s: the normal is
+  // multiplied by 2^(k s) and d by 2^((k + 1) s) (k = 2, or 1 for a wall). Multiplying the normal by
+  // another 2^s (or d by 2^-s) makes them a positive multiple of the plane's own (n, d).
+  if (scaled.scale >= 0) {
+    for (int k = 0; k < 3; ++k) mpz_mul_2exp(c[k].get_mpz_t(), c[k].get_mpz_t(), static_cast<mp_bitcnt_t>(scaled.scale));
+  } else {
+    mpz_mul_2exp(c[3].get_mpz_t(), c[3].get_mpz_t(), static_cast<mp_bitcnt_t>(-scaled.scale));
+  }
+  return c;
+}
+
+ExactPoint exact_point(const Vec3& x) {
+  ScaledInputs scaled;
+  for (int k = 0; k < 3; ++k) scaled.include(x[k]);
+  if (scaled.scale == std::numeric_limits<int>::min()) return {0, 0, 0, 1};  // the origin
+  ExactPoint p;
+  for (int k = 0; k < 3; ++k) p[k] = scaled.integer(x[k]);
+  // W = 2^scale; a negative scale (huge coordinates) multiplies X, Y, Z instead.
+  p[3] = 1;
+  if (scaled.scale >= 0) {
+    mpz_mul_2exp(p[3].get_mpz_t(), p[3].get_mpz_t(), static_cast<mp_bitcnt_t>(scaled.scale));
+  } else {
+    for (int k = 0; k < 3; ++k) mpz_mul_2exp(p[k].get_mpz_t(), p[k].get_mpz_t(), static_cast<mp_bitcnt_t>(-scaled.scale));
+  }
+  return p;
+}
+
+ExactPoint exact_tpi(const ExactPlane& a, const ExactPlane& b, const ExactPlane& c) {
+  const mpz_class n[3][3] = {{a[0], a[1], a[2]}, {b[0], b[1], b[2]}, {c[0], c[1], c[2]}};
+  const mpz_class minus_d[3] = {-a[3], -b[3], -c[3]};
+  ExactPoint h = cramer(n, minus_d);
+  if (sgn(h[3]) < 0) {
+    for (auto& v : h) v = -v;
+  }
+  return h;
+}
+
+int exact_side(const ExactPlane& plane, const ExactPoint& point) {
+  return sgn(plane[0] * point[0] + plane[1] * point[1] + plane[2] * point[2] + plane[3] * point[3]);
+}
+
+std::array<mpq_class, 3> exact_coordinates(const ExactPoint& point) {
+  std::array<mpq_class, 3> x;
+  for (int k = 0; k < 3; ++k) {
+    x[k] = mpq_class(point[k], point[3]);
+    x[k].canonicalize();  // GMP's rational functions need a positive, reduced denominator
   }
   return x;
 }

@@ -119,4 +119,26 @@ Vec3 tpi_coordinates(const Plane& a, const Plane& b, const Plane& c, const Homog
 /// than the rounding of its corners.
 std::array<mpq_class, 3> tpi_exact(const Plane& a, const Plane& b, const Plane& c);
 
+// Exact forms for caching. Signs of the predicates do not change when a plane's coefficients, or
+// a point's homogeneous coordinates, are multiplied by a positive number, so each plane and each
+// point is scaled to integers on its own.
+
+/// The plane's (n, d) times a positive power of two, as integers.
+using ExactPlane = std::array<mpz_class, 4>;
+ExactPlane exact_plane(const Plane& plane);
+
+/// Homogeneous coordinates (X, Y, Z, W) with W > 0, as integers: the point is (X, Y, Z) / W.
+using ExactPoint = std::array<mpz_class, 4>;
+ExactPoint exact_point(const Vec3& x);
+/// The point where three planes meet (they must meet in exactly one point).
+ExactPoint exact_tpi(const ExactPlane& a, const ExactPlane& b, const ExactPlane& c);
+/// Sign of the plane at the point: sign(n . (X, Y, Z) + d W).
+int exact_side(const ExactPlane& plane, const ExactPoint& point);
+/// Rational coordinates of an exact point.
+std::array<mpq_class, 3> exact_coordinates(const ExactPoint& point);
+
+/// Rounded coordinates from filtered homogeneous coordinates, when their error bound is within
+/// kCoordinateTolerance; false otherwise (then round exact_coordinates instead).
+bool rounded_coordinates(const Homogeneous& h, Vec3* x);
+
 }  // namespace tetcut::geometry

@@ -5,6 +5,8 @@
 #include <cmath>
 #include <limits>
 
+#include "geometry/approx.hpp"
+
 namespace tetcut::geometry {
 namespace {
 
@@ -55,6 +57,18 @@ int orient3d(const double* a, const double* b, const double* c, const double* d)
     if (det > bound) return 1;
     if (-det > bound) return -1;
   }
+  // Second stage: the same determinant with the rounding errors actually committed; it settles
+  // exact zeros of exactly representable configurations (grid-aligned points) without GMP.
+  Approx m[3][3];
+  for (int k = 0; k < 3; ++k) {
+    m[0][k] = Approx::exact(b[k]) - Approx::exact(a[k]);
+    m[1][k] = Approx::exact(c[k]) - Approx::exact(a[k]);
+    m[2][k] = Approx::exact(d[k]) - Approx::exact(a[k]);
+  }
+  const int s = certain_sign(m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) -
+                             m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0]) +
+                             m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]));
+  if (s != 2) return s;
   return orient3d_exact(a, b, c, d);
 }
 
@@ -68,6 +82,9 @@ int orient2d(const double* a, const double* b, const double* c) {
     if (det > bound) return 1;
     if (-det > bound) return -1;
   }
+  const auto e = [](double x) { return Approx::exact(x); };
+  const int s = certain_sign((e(b[0]) - e(a[0])) * (e(c[1]) - e(a[1])) - (e(b[1]) - e(a[1])) * (e(c[0]) - e(a[0])));
+  if (s != 2) return s;
   const mpq_class exact = (mpq_class(b[0]) - mpq_class(a[0])) * (mpq_class(c[1]) - mpq_class(a[1])) -
                           (mpq_class(b[1]) - mpq_class(a[1])) * (mpq_class(c[0]) - mpq_class(a[0]));
   return sgn(exact);

@@ -100,21 +100,42 @@ VertexId IntersectionRegistry::add_node(Index node, PlaneId a, PlaneId b, PlaneI
   return static_cast<VertexId>(vertices_.size() - 1);
 }
 
+const geometry::ExactPlane& IntersectionRegistry::exact_plane(PlaneId p) const {
+  if (exact_planes_.size() <= static_cast<std::size_t>(p)) exact_planes_.resize(planes_.size());
+  if (!exact_planes_[p]) exact_planes_[p] = std::make_unique<geometry::ExactPlane>(geometry::exact_plane(planes_[p]));
+  return *exact_planes_[p];
+}
+
+const geometry::ExactPoint& IntersectionRegistry::exact_point(VertexId v) const {
+  if (exact_points_.size() <= static_cast<std::size_t>(v)) exact_points_.resize(vertices_.size());
+  if (!exact_points_[v]) {
+    const Vertex& vertex = vertices_[v];
+    exact_points_[v] = std::make_unique<geometry::ExactPoint>(
+        vertex.node >= 0 ? geometry::exact_point(rest_->row(vertex.node).transpose())
+                         : geometry::exact_tpi(exact_plane(vertex.planes[0]), exact_plane(vertex.planes[1]),
+                                               exact_plane(vertex.planes[2])));
+  }
+  return *exact_points_[v];
+}
+
 int IntersectionRegistry::compute_side(VertexId v, PlaneId q) const {
   const Vertex& vertex = vertices_[v];
   if (vertex.planes[0] == q || vertex.planes[1] == q || vertex.planes[2] == q) return 0;
-  if (vertex.node >= 0) {
-    return geometry::side_of_point(planes_[q], rest_->row(vertex.node).transpose(), vertex.homogeneous);
-  }
-  return geometry::side_of_tpi(planes_[vertex.planes[0]], planes_[vertex.planes[1]], planes_[vertex.planes[2]],
-                               vertex.homogeneous, vertex.orientation, planes_[q]);
+  // q . (X, Y, Z, W) = det4 of the point's three planes and q (W = 1 for an input point).
+  const auto& p = planes_[q].approx();
+  const auto& h = vertex.homogeneous;
+  const int s = geometry::certain_sign(p[0] * h[0] + p[1] * h[1] + p[2] * h[2] + p[3] * h[3]);
+  if (s != 2) return s * vertex.orientation;
+  return geometry::exact_side(exact_plane(q), exact_point(v));
 }
 
 int IntersectionRegistry::side(VertexId v, const Plane& q) const {
+  const auto& p = q.approx();
   const Vertex& vertex = vertices_[v];
-  if (vertex.node >= 0) return geometry::side_of_point(q, rest_->row(vertex.node).transpose(), vertex.homogeneous);
-  return geometry::side_of_tpi(planes_[vertex.planes[0]], planes_[vertex.planes[1]], planes_[vertex.planes[2]],
-                               vertex.homogeneous, vertex.orientation, q);
+  const auto& h = vertex.homogeneous;
+  const int s = geometry::certain_sign(p[0] * h[0] + p[1] * h[1] + p[2] * h[2] + p[3] * h[3]);
+  if (s != 2) return s * vertex.orientation;
+  return geometry::exact_side(geometry::exact_plane(q), exact_point(v));
 }
 
 int IntersectionRegistry::side(VertexId v, PlaneId q) const {
@@ -155,10 +176,18 @@ void IntersectionRegistry::end_memo() { memo_planes_ = {-1, -1, -1, -1}; }
 
 void IntersectionRegistry::compute_position(VertexId v) const {
   const Vertex& vertex = vertices_[v];
-  positions_[v] = vertex.node >= 0
-                      ? Vec3(rest_->row(vertex.node).transpose())
-                      : geometry::tpi_coordinates(planes_[vertex.planes[0]], planes_[vertex.planes[1]],
-                                                  planes_[vertex.planes[2]], vertex.homogeneous);
+  Vec3& x = positions_[v];
+  if (vertex.node >= 0) {
+    x = rest_->row(vertex.node).transpose();
+  } else if (!geometry::rounded_coordinates(vertex.homogeneous, &x)) {
+    // Ill-conditioned: round the exact coordinates. The exact point is computed here rather than
+    // through the cache, since update_positions runs this in parallel.
+    const geometry::ExactPoint exact = geometry::exact_tpi(geometry::exact_plane(planes_[vertex.planes[0]]),
+                                                           geometry::exact_plane(planes_[vertex.planes[1]]),
+                                                           geometry::exact_plane(planes_[vertex.planes[2]]));
+    const std::array<mpq_class, 3> coordinates = geometry::exact_coordinates(exact);
+    for (int k = 0; k < 3; ++k) x[k] = coordinates[k].get_d();
+  }
   has_position_[v] = 1;
 }
 
@@ -172,11 +201,7 @@ const Vec3& IntersectionRegistry::position(VertexId v) const {
 }
 
 std::array<mpq_class, 3> IntersectionRegistry::exact_position(VertexId v) const {
-  const Vertex& vertex = vertices_[v];
-  if (vertex.node >= 0) {
-    return {mpq_class((*rest_)(vertex.node, 0)), mpq_class((*rest_)(vertex.node, 1)), mpq_class((*rest_)(vertex.node, 2))};
-  }
-  return geometry::tpi_exact(planes_[vertex.planes[0]], planes_[vertex.planes[1]], planes_[vertex.planes[2]]);
+  return geometry::exact_coordinates(exact_point(v));
 }
 
 double IntersectionRegistry::position_tolerance() { return geometry::kCoordinateTolerance; }

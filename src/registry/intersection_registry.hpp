@@ -12,6 +12,9 @@
 // by rounded values). Points are never duplicated: the cell complex creates a point only strictly
 // inside one of its edges, where no other point can be, and it recognises a point that a new triple
 // names by an exact side test returning zero.
+//
+// Not thread-safe: side tests fill caches. Positions can be filled in advance (update_positions)
+// so that parallel readers only read.
 
 #include <tetcut/types.hpp>
 
@@ -19,6 +22,7 @@
 #include <cstdint>
 #include <functional>
 #include <initializer_list>
+#include <memory>
 #include <unordered_map>
 #include <vector>
 
@@ -90,6 +94,10 @@ class IntersectionRegistry {
  private:
   int compute_side(VertexId v, PlaneId q) const;
   void compute_position(VertexId v) const;
+  // Exact forms, computed when a filter first fails and kept: later exact tests on the same plane
+  // or point are then a four-term integer dot product.
+  const geometry::ExactPlane& exact_plane(PlaneId p) const;
+  const geometry::ExactPoint& exact_point(VertexId v) const;
 
   struct PointsKey {
     std::array<double, 9> coordinates;
@@ -102,6 +110,8 @@ class IntersectionRegistry {
   const Points* rest_;
   std::vector<geometry::Plane> planes_;
   std::vector<Vertex> vertices_;
+  mutable std::vector<std::unique_ptr<geometry::ExactPlane>> exact_planes_;
+  mutable std::vector<std::unique_ptr<geometry::ExactPoint>> exact_points_;
   mutable std::vector<Vec3> positions_;
   mutable std::vector<std::uint8_t> has_position_;
   std::unordered_map<PointsKey, PlaneId, KeyHash> triangle_planes_;

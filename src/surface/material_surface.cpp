@@ -13,6 +13,7 @@ using cells::CellComplex;
 using cells::Corner;
 using cells::Facet;
 using cells::Side;
+using registry::PlaneId;
 using registry::VertexId;
 
 // A surface vertex: a point (mesh node n as n, intersection v as num_nodes + v) and the nodes of
@@ -49,16 +50,21 @@ class SurfaceBuilder {
     if (node >= 0) {
       id = node_vertex(node, copy);
     } else {
-      // Weight k vanishes exactly where the point lies on the face opposite node k.
+      // Weight k vanishes exactly where the point lies on the face opposite node k. Faces of refined
+      // tets have registry planes (cached exact forms); others are built here.
       const Points& rest = mesh_.rest();
       const Tets& tets = mesh_.tets();
       bool zero[4];
       for (int k = 0; k < 4; ++k) {
-        const auto& f = kTetFaces[k];
-        const geometry::Plane face = geometry::Plane::through(rest.row(tets(tet, f[0])).transpose(),
-                                                             rest.row(tets(tet, f[1])).transpose(),
-                                                             rest.row(tets(tet, f[2])).transpose());
-        zero[k] = reg.side(v, face) == 0;
+        const PlaneId plane = complex_.face_plane_id(mesh_.adjacency().tet_faces(tet, k));
+        if (plane >= 0) {
+          zero[k] = reg.side(v, plane) == 0;
+        } else {
+          const auto& f = kTetFaces[k];
+          zero[k] = reg.side(v, geometry::Plane::through(rest.row(tets(tet, f[0])).transpose(),
+                                                        rest.row(tets(tet, f[1])).transpose(),
+                                                        rest.row(tets(tet, f[2])).transpose())) == 0;
+        }
       }
       VertexKey key{mesh_.num_nodes() + static_cast<std::int64_t>(v), {-1, -1, -1, -1}};
       for (int k = 0; k < 4; ++k) key.nodes[k] = zero[k] ? -1 : copies_.copy_nodes(copy, k);

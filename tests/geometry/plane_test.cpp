@@ -173,5 +173,45 @@ TEST_F(PlaneTest, TinyAndHugeCoordinatesFallBackToExact) {
   }
 }
 
+// The cached exact forms: each plane's integers are a positive multiple of its (n, d), and points
+// from exact_tpi are the reference points, for planes whose inputs have very different scales.
+TEST_F(PlaneTest, ExactFormsAreScaledCopies) {
+  std::mt19937_64 generator(11);
+  std::uniform_real_distribution<double> unit(-1, 1);
+  for (int trial = 0; trial < 300; ++trial) {
+    // Scales differ per plane, so each is turned into integers with its own power of two.
+    const auto random_point = [&](double scale) -> Vec3 {
+      return Vec3(unit(generator), unit(generator), unit(generator)) * scale;
+    };
+    const double scales[3] = {1.0 / 1024, 1.0, 4096.0};
+    Plane planes[3];
+    for (int i = 0; i < 3; ++i) {
+      const double s = scales[(trial + i) % 3];
+      planes[i] = (trial + i) % 4 == 0 ? Plane::wall(random_point(s), random_point(s), i)
+                                       : Plane::through(random_point(s), random_point(s), random_point(s));
+    }
+    for (const Plane& plane : planes) {
+      const ExactPlane e = exact_plane(plane);
+      const auto r = reference_plane(plane);
+      // e = lambda * r with lambda > 0: compare through the largest reference component.
+      int k = 0;
+      for (int j = 1; j < 4; ++j) {
+        if (abs(r[j]) > abs(r[k])) k = j;
+      }
+      const mpq_class lambda = mpq_class(e[k]) / r[k];
+      ASSERT_GT(lambda, 0);
+      for (int j = 0; j < 4; ++j) ASSERT_EQ(mpq_class(e[j]), lambda * r[j]);
+    }
+    if (normal_determinant_sign(planes[0], planes[1], planes[2]) == 0) continue;
+    const ExactPoint point = exact_tpi(exact_plane(planes[0]), exact_plane(planes[1]), exact_plane(planes[2]));
+    ASSERT_GT(point[3], 0);
+    const auto x = exact_coordinates(point);
+    const auto reference = tpi_exact(planes[0], planes[1], planes[2]);
+    for (int k = 0; k < 3; ++k) ASSERT_EQ(x[k], reference[k]);
+    const Plane q = Plane::through(random_point(1), random_point(1), random_point(1));
+    ASSERT_EQ(exact_side(exact_plane(q), point), reference_side(planes[0], planes[1], planes[2], q));
+  }
+}
+
 }  // namespace
 }  // namespace tetcut::geometry
