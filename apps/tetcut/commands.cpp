@@ -1,6 +1,8 @@
 #include "commands.hpp"
 
+#include <tetcut/cutter.hpp>
 #include <tetcut/error.hpp>
+#include <tetcut/figures.hpp>
 #include <tetcut/generators.hpp>
 #include <tetcut/io.hpp>
 #include <tetcut/quality.hpp>
@@ -119,6 +121,135 @@ struct MeshOutputOptions {
     return options;
   }
 };
+
+using Clock = std::chrono::steady_clock;
+
+double seconds_since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
+
+void check_surface_output(const fs::path& path) {
+  if (file_kind(path) != FileKind::kSurface) {
+    throw Error(ErrorKind::kInvalidArgument, "output must be a surface file (" + supported_surface_extensions() + ")",
+                path.string());
+  }
+}
+
+// Per-copy data a viewer can colour by: the input tet, the piece, and the material it holds.
+TetMeshWriteOptions cut_mesh_write_options(const CutMesh& cut, const TetMesh& input, TetMeshWriteOptions options) {
+  const Index n = cut.mesh.num_tets();
+  CellField original{"original_tet", {}, true}, piece{"piece", {}, true}, volume{"material_volume", {}, false},
+      fraction{"material_fraction", {}, false};
+  for (Index c = 0; c < n; ++c) {
+    const Index t = cut.tet_parent[c];
+    const auto& p = input.rest();
+    const auto& tets = input.tets();
+    const double whole = signed_volume(p.row(tets(t, 0)), p.row(tets(t, 1)), p.row(tets(t, 2)), p.row(tets(t, 3)));
+    original.values.push_back(t);
+    piece.values.push_back(cut.tet_piece[c]);
+    volume.values.push_back(cut.tet_material_volume[c]);
+    fraction.values.push_back(cut.tet_material_volume[c] / whole);
+  }
+  options.cell_fields = {std::move(original), std::move(piece), std::move(volume), std::move(fraction)};
+  options.tet_labels = cut.tet_piece;
+  return options;
+}
+
+struct NamedBatch {
+  std::string name;
+  TriangleSurface triangles;
+};
+
+// Where a cut's results go; empty paths are not written.
+struct CutOutputs {
+  fs::path mesh, surface, report;
+  bool binary = false;
+  TetMeshWriteOptions mesh_options;
+
+  // Checks every output before any work, so a typo costs nothing and nothing is half written.
+  void check(const std::vector<fs::path>& inputs) const {
+    for (const fs::path* output : {&mesh, &surface, &report}) {
+      for (const fs::path& input : inputs) {
+        if (!output->empty()) check_not_input(*output, input);
+      }
+    }
+    if (!mesh.empty()) check_output_kind(mesh, FileKind::kTetMesh);
+    if (!surface.empty()) check_surface_output(surface);
+  }
+};
+
+// Cuts `mesh` by the batches in order, prints warnings and a summary, and writes the outputs.
+CutResult cut_and_report(const std::string& name, const TetMesh& mesh, const std::vector<NamedBatch>& batches,
+                         const CutOutputs& outputs, double read_seconds) {
+  auto start = Clock::now();
+  Cutter cutter(mesh);
+  Index triangles = 0, skipped = 0;
+  for (const NamedBatch& batch : batches) {
+    const CutBatchReport report = cutter.cut(batch.triangles);
+    triangles += report.triangles;
+    skipped += static_cast<Index>(report.degenerate.size());
+    if (!report.degenerate.empty()) {
+      fmt::print(stderr, "tetcut: warning: {}: skipped {} zero-area triangle(s), the first is triangle {}\n", batch.name,
+                 report.degenerate.size(), report.degenerate.front());
+    }
+    if (report.tets_touched == 0) fmt::print(stderr, "tetcut: warning: {}: the cut does not reach into the mesh\n", batch.name);
+  }
+  const double insert_seconds = seconds_since(start);
+  CutResult result = cutter.result();
+  const double cut_seconds = insert_seconds + result.seconds_mesh;
+
+  start = Clock::now();
+  if (!outputs.mesh.empty()) {
+    TetMeshWriteOptions options = cut_mesh_write_options(result.mesh, mesh, outputs.mesh_options);
+    write_tet_mesh(outputs.mesh, result.mesh.mesh, options);
+  }
+  if (!outputs.surface.empty()) write_surface(outputs.surface, result.surface.surface, SurfaceWriteOptions{outputs.binary});
+  const double write_seconds = seconds_since(start);
+
+  const SurfaceStats surface = measure_surface(result.surface.surface);
+  double volume = 0;
+  for (const double v : result.mesh.piece_volumes) volume += v;
+  fmt::print("cut {} by {} batch(es): {} triangles", name, batches.size(), triangles);
+  if (skipped > 0) fmt::print(" ({} zero-area, skipped)", skipped);
+  fmt::print("\n");
+  fmt::print("  tets             {} -> {}\n", mesh.num_tets(), result.mesh.mesh.num_tets());
+  fmt::print("  nodes            {} -> {}\n", mesh.num_nodes(), result.mesh.mesh.num_nodes());
+  fmt::print("  pieces           {}\n", result.mesh.num_pieces());
+  fmt::print("  volume           {:.17g}\n", volume);
+  fmt::print("  surface          {} triangles, area {:.17g}, {}\n", result.surface.surface.num_triangles(), surface.area,
+             surface.watertight ? "closed" : "NOT closed");
+  fmt::print("  time             read {:.3f} s, cut {:.3f} s, surface {:.3f} s, write {:.3f} s\n", read_seconds,
+             cut_seconds, result.seconds_surface, write_seconds);
+  for (const fs::path* path : {&outputs.mesh, &outputs.surface, &outputs.report}) {
+    if (!path->empty()) fmt::print("  wrote            {}\n", path->string());
+  }
+
+  if (!outputs.report.empty()) {
+    Json cut_names = Json::array();
+    for (const NamedBatch& batch : batches) cut_names.push_back(batch.name);
+    const Json report{
+        {"mesh", name},
+        {"cuts", cut_names},
+        {"nodes_in", mesh.num_nodes()},
+        {"tets_in", mesh.num_tets()},
+        {"nodes_out", result.mesh.mesh.num_nodes()},
+        {"tets_out", result.mesh.mesh.num_tets()},
+        {"triangles", triangles},
+        {"zero_area_triangles_skipped", skipped},
+        {"pieces", result.mesh.num_pieces()},
+        {"piece_volumes", result.mesh.piece_volumes},
+        {"volume", volume},
+        {"surface",
+         {{"triangles", result.surface.surface.num_triangles()},
+          {"vertices", result.surface.surface.num_vertices()},
+          {"area", surface.area},
+          {"closed", surface.watertight},
+          {"manifold", surface.closed},
+          {"enclosed_volume", surface.enclosed_volume}}},
+        {"timings", {{"read", read_seconds}, {"cut", cut_seconds}, {"surface", result.seconds_surface}, {"write", write_seconds}}},
+    };
+    write_text_file(outputs.report, report.dump(2) + "\n");
+  }
+  return result;
+}
 
 }  // namespace
 
@@ -274,34 +405,77 @@ void add_convert_command(CLI::App& app, Action& action) {
   });
 }
 
+void add_cut_command(CLI::App& app, Action& action) {
+  struct Options {
+    fs::path mesh;
+    std::vector<fs::path> cuts;
+    CutOutputs outputs;
+    MeshOutputOptions out;
+  };
+  auto options = std::make_shared<Options>();
+  CLI::App* command = app.add_subcommand(
+      "cut", "Cut a tet mesh by triangle soups: each CUT file is one batch of triangles, applied in order to the "
+             "rest (undeformed) mesh");
+  command->add_option("MESH", options->mesh, "Tet mesh to cut (" + supported_tet_mesh_extensions() + ")")->required();
+  command->add_option("CUT", options->cuts, "Cut surfaces, one batch each (" + supported_surface_extensions() + ")")
+      ->required()
+      ->expected(1, -1);
+  command->add_option("--out-mesh", options->outputs.mesh,
+                      "Write the cut simulation mesh; .vtu carries original_tet, piece, material_volume and "
+                      "material_fraction per tet, .mesh and .msh the piece as a label");
+  command->add_option("--out-surface", options->outputs.surface,
+                      "Write the material surface (" + supported_surface_extensions() + ")");
+  command->add_option("--report", options->outputs.report, "Write a JSON report: counts, piece volumes, surface, timings");
+  command->add_flag("--binary", options->outputs.binary, "Binary PLY or STL surface output");
+  options->out.add(command);
+  command->callback([options, &action] {
+    action = [options] {
+      std::vector<fs::path> inputs = options->cuts;
+      inputs.push_back(options->mesh);
+      options->outputs.check(inputs);
+      const auto start = Clock::now();
+      const TetMesh mesh = read_tet_mesh(options->mesh);
+      std::vector<NamedBatch> batches;
+      for (const fs::path& path : options->cuts) {
+        batches.push_back({path.string(), read_surface(path)});
+        if (batches.back().triangles.num_triangles() == 0) {
+          throw Error(ErrorKind::kInvalidInput, "the cut has no triangles", path.string());
+        }
+      }
+      options->outputs.mesh_options = options->out.write_options();
+      cut_and_report(options->mesh.string(), mesh, batches, options->outputs, seconds_since(start));
+      return 0;
+    };
+  });
+}
+
 void add_demo_command(CLI::App& app, Action& action) {
   struct Options {
     fs::path directory = "out";
   };
   auto options = std::make_shared<Options>();
-  CLI::App* command = app.add_subcommand("demo", "The default job: build the paper's 320-tet cube and a BCC lattice, "
-                                                 "report them and write them out");
+  CLI::App* command = app.add_subcommand(
+      "demo", "The default job, no input needed: the paper's Figure 4 (the 320-tet cube cut by 32 planes into 289 "
+              "sticks) and Figure 2 (one tet cut by 50 random triangles), with summaries, meshes, surfaces and reports");
   command->add_option("-o,--output-dir", options->directory, "Directory for the outputs (created if missing)");
   command->callback([options, &action] {
     action = [options] {
       fs::create_directories(options->directory);
-      using Clock = std::chrono::steady_clock;
-      const auto start = Clock::now();
-      // The paper's Figure 4 mesh: a 4x4x4 grid of 5-tet cubes, 320 tets.
-      const TetMesh cube = make_grid(Box{}, {4, 4, 4}, 5);
-      const TetMesh bcc = make_bcc(Box{}, 0.125);
-      const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
-      print_mesh_summary("cube: 4x4x4 grid of 5-tet cubes (the paper's Figure 4 mesh)", cube, measure_quality(cube));
-      print_mesh_summary("bcc: BCC lattice of the unit cube, spacing 1/8", bcc, measure_quality(bcc));
-      const fs::path cube_path = options->directory / "cube.vtu";
-      const fs::path bcc_path = options->directory / "bcc.vtu";
-      const fs::path surface_path = options->directory / "cube_boundary.obj";
-      write_tet_mesh(cube_path, cube);
-      write_tet_mesh(bcc_path, bcc);
-      write_surface(surface_path, boundary_surface(cube));
-      fmt::print("generated in {:.3f} s; wrote {}, {}, {}\n", seconds, cube_path.string(), bcc_path.string(),
-                 surface_path.string());
-      fmt::print("cutting ('tetcut cut') is not implemented yet: see README.md, status\n");
+      const fs::path& dir = options->directory;
+      CutOutputs figure4;
+      figure4.mesh = dir / "figure4.vtu";
+      figure4.surface = dir / "figure4_surface.obj";
+      figure4.report = dir / "figure4_report.json";
+      cut_and_report("figure 4: 4x4x4 grid of 5-tet cubes", figures::figure4_cube(),
+                     {{"16 + 16 planes x, y = i/17", figures::figure4_planes()}}, figure4, 0);
+      fmt::print("\n");
+      CutOutputs figure2;
+      figure2.mesh = dir / "figure2.vtu";
+      figure2.surface = dir / "figure2_surface.obj";
+      figure2.report = dir / "figure2_report.json";
+      cut_and_report("figure 2: one tet", figures::figure2_tet(), {{"50 random triangles", figures::figure2_triangles()}},
+                     figure2, 0);
+      fmt::print("\nOpen the .vtu files in ParaView and colour by 'piece'; the .obj files are the material surfaces.\n");
       return 0;
     };
   });

@@ -26,6 +26,7 @@ int main(int argc, char** argv) {
   tetcut::cli::add_bcc_command(app, action);
   tetcut::cli::add_info_command(app, action);
   tetcut::cli::add_convert_command(app, action);
+  tetcut::cli::add_cut_command(app, action);
   tetcut::cli::add_demo_command(app, action);
   try {
     app.parse(argc, argv);

@@ -13,6 +13,7 @@
 
 #include <filesystem>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace tetcut {
@@ -30,6 +31,10 @@ struct TetMeshWriteOptions {
   /// Write current (deformed) positions instead of rest positions.
   bool current_positions = false;
   std::vector<CellField> cell_fields;
+  /// Optional integer label per tet (e.g. its piece), written where a format has one: the Medit
+  /// tetrahedron reference, and the Gmsh physical and elementary tags (label + 1, as Gmsh tags
+  /// are positive; in 4.1 one volume entity per label). Empty: no labels.
+  std::vector<Index> tet_labels;
 };
 
 struct SurfaceWriteOptions {
@@ -54,6 +59,9 @@ void write_tet_mesh(const std::filesystem::path& path, const TetMesh& mesh, cons
 TriangleSurface read_surface(const std::filesystem::path& path);
 void write_surface(const std::filesystem::path& path, const TriangleSurface& surface,
                    const SurfaceWriteOptions& options = {});
+
+/// Writes text to `path` through a temporary file renamed into place, like every writer here.
+void write_text_file(const std::filesystem::path& path, std::string_view text);
 
 /// Lists the extensions each kind accepts, for help texts.
 std::string supported_tet_mesh_extensions();

@@ -6,6 +6,7 @@
 #include <tetcut/error.hpp>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <string>
 
@@ -91,11 +92,18 @@ CutBatchReport Cutter::cut(const TriangleSurface& batch) {
 }
 
 CutResult Cutter::result() const {
+  using Clock = std::chrono::steady_clock;
+  const auto seconds_since = [](Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); };
   const State& s = *state_;
+  auto start = Clock::now();
   const components::MaterialComponents components = components::find_components(s.complex);
   connectivity::TetCopies copies = connectivity::build_copies(s.complex, components);
   CutResult result;
+  result.seconds_mesh = seconds_since(start);
+  start = Clock::now();
   result.surface = surface::extract_material_surface(s.complex, components, copies);
+  result.seconds_surface = seconds_since(start);
+  start = Clock::now();
 
   CutMesh& out = result.mesh;
   const Index num_nodes = static_cast<Index>(copies.node_parent.size());
@@ -111,6 +119,7 @@ CutResult Cutter::result() const {
   out.tet_piece = std::move(copies.copy_piece);
   out.tet_material_volume = std::move(copies.copy_volume);
   out.piece_volumes = std::move(copies.piece_volume);
+  result.seconds_mesh += seconds_since(start);
   return result;
 }
 

@@ -21,10 +21,10 @@ struct TetMeshData {
 };
 
 TetMeshData read_medit(std::string_view text, const std::string& source);
-void write_medit(std::ostream& out, const Points& points, const Tets& tets);
+void write_medit(std::ostream& out, const Points& points, const Tets& tets, const std::vector<Index>& labels);
 
 TetMeshData read_gmsh(std::string_view text, const std::string& source);
-void write_gmsh(std::ostream& out, const Points& points, const Tets& tets, int version);
+void write_gmsh(std::ostream& out, const Points& points, const Tets& tets, int version, const std::vector<Index>& labels);
 
 /// TetGen: parse the .node file first, then the .ele file against its node numbering.
 struct TetgenNodes {

@@ -1,6 +1,7 @@
 // Gmsh .msh, ASCII, versions 2.2 and 4.1. Linear tetrahedra (element type 4) are kept; every other
 // element type is skipped, and so are sections other than $MeshFormat, $Nodes and $Elements.
 
+#include <algorithm>
 #include <string>
 #include <unordered_map>
 
@@ -189,7 +190,9 @@ TetMeshData read_gmsh(std::string_view text, const std::string& source) {
   return data;
 }
 
-void write_gmsh(std::ostream& out, const Points& points, const Tets& tets, int version) {
+void write_gmsh(std::ostream& out, const Points& points, const Tets& tets, int version, const std::vector<Index>& labels) {
+  // Gmsh tags are positive: label + 1, or 1 for every tet without labels.
+  const auto tag = [&](Eigen::Index t) -> Index { return labels.empty() ? 1 : labels[t] + 1; };
   const auto write_xyz = [&](Eigen::Index i) {
     for (int k = 0; k < 3; ++k) {
       out << ' ';
@@ -205,8 +208,8 @@ void write_gmsh(std::ostream& out, const Points& points, const Tets& tets, int v
     }
     out << "$EndNodes\n$Elements\n" << tets.rows() << '\n';
     for (Eigen::Index t = 0; t < tets.rows(); ++t) {
-      out << t + 1 << " 4 2 1 1 " << tets(t, 0) + 1 << ' ' << tets(t, 1) + 1 << ' ' << tets(t, 2) + 1 << ' '
-          << tets(t, 3) + 1 << '\n';
+      out << t + 1 << " 4 2 " << tag(t) << ' ' << tag(t) << ' ' << tets(t, 0) + 1 << ' ' << tets(t, 1) + 1 << ' '
+          << tets(t, 2) + 1 << ' ' << tets(t, 3) + 1 << '\n';
     }
     out << "$EndElements\n";
     return;
@@ -214,25 +217,44 @@ void write_gmsh(std::ostream& out, const Points& points, const Tets& tets, int v
   if (version != 41) {
     throw Error(ErrorKind::kInvalidArgument, "Gmsh version must be 22 or 41, not " + std::to_string(version));
   }
-  // One volume entity holds every node and tet.
+  // One volume entity per tag, each with that physical tag; all nodes sit in the first entity
+  // (Gmsh numbers nodes globally, so elements may use nodes of any entity).
+  std::vector<std::vector<Eigen::Index>> by_tag;
+  std::vector<Index> tags;
+  {
+    std::vector<Index> all(static_cast<std::size_t>(tets.rows()));
+    for (Eigen::Index t = 0; t < tets.rows(); ++t) all[t] = tag(t);
+    tags = all;
+    std::sort(tags.begin(), tags.end());
+    tags.erase(std::unique(tags.begin(), tags.end()), tags.end());
+    if (tags.empty()) tags.push_back(1);
+    by_tag.resize(tags.size());
+    for (Eigen::Index t = 0; t < tets.rows(); ++t) {
+      by_tag[std::lower_bound(tags.begin(), tags.end(), all[t]) - tags.begin()].push_back(t);
+    }
+  }
   out << "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n";
-  out << "$Entities\n0 0 0 1\n1 ";
+  out << "$Entities\n0 0 0 " << tags.size() << '\n';
   Eigen::Vector3d lo = Eigen::Vector3d::Zero(), hi = Eigen::Vector3d::Zero();
   if (points.rows() > 0) {
     lo = points.colwise().minCoeff().transpose();
     hi = points.colwise().maxCoeff().transpose();
   }
-  for (int k = 0; k < 3; ++k) {
-    write_real(out, lo[k]);
-    out << ' ';
+  for (const Index t : tags) {
+    out << t << ' ';
+    for (int k = 0; k < 3; ++k) {
+      write_real(out, lo[k]);
+      out << ' ';
+    }
+    for (int k = 0; k < 3; ++k) {
+      write_real(out, hi[k]);
+      out << ' ';
+    }
+    out << "1 " << t << " 0\n";
   }
-  for (int k = 0; k < 3; ++k) {
-    write_real(out, hi[k]);
-    out << ' ';
-  }
-  out << "0 0\n$EndEntities\n";
+  out << "$EndEntities\n";
   const Eigen::Index n = points.rows();
-  out << "$Nodes\n1 " << n << " 1 " << n << "\n3 1 0 " << n << '\n';
+  out << "$Nodes\n1 " << n << " 1 " << n << "\n3 " << tags.front() << " 0 " << n << '\n';
   for (Eigen::Index i = 0; i < n; ++i) out << i + 1 << '\n';
   for (Eigen::Index i = 0; i < n; ++i) {
     write_real(out, points(i, 0));
@@ -244,10 +266,13 @@ void write_gmsh(std::ostream& out, const Points& points, const Tets& tets, int v
   }
   out << "$EndNodes\n";
   const Eigen::Index m = tets.rows();
-  out << "$Elements\n1 " << m << " 1 " << m << "\n3 1 4 " << m << '\n';
-  for (Eigen::Index t = 0; t < m; ++t) {
-    out << t + 1 << ' ' << tets(t, 0) + 1 << ' ' << tets(t, 1) + 1 << ' ' << tets(t, 2) + 1 << ' ' << tets(t, 3) + 1
-        << '\n';
+  out << "$Elements\n" << tags.size() << ' ' << m << " 1 " << m << '\n';
+  for (std::size_t b = 0; b < tags.size(); ++b) {
+    out << "3 " << tags[b] << " 4 " << by_tag[b].size() << '\n';
+    for (const Eigen::Index t : by_tag[b]) {
+      out << t + 1 << ' ' << tets(t, 0) + 1 << ' ' << tets(t, 1) + 1 << ' ' << tets(t, 2) + 1 << ' ' << tets(t, 3) + 1
+          << '\n';
+    }
   }
   out << "$EndElements\n";
 }

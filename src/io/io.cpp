@@ -79,6 +79,10 @@ TetMesh read_tet_mesh(const std::filesystem::path& path) {
 }
 
 void write_tet_mesh(const std::filesystem::path& path, const TetMesh& mesh, const TetMeshWriteOptions& options) {
+  if (!options.tet_labels.empty() && static_cast<Index>(options.tet_labels.size()) != mesh.num_tets()) {
+    throw Error(ErrorKind::kInvalidArgument, "tet labels: " + std::to_string(options.tet_labels.size()) +
+                                                 " values for " + std::to_string(mesh.num_tets()) + " tets");
+  }
   for (const CellField& field : options.cell_fields) {
     if (static_cast<Index>(field.values.size()) != mesh.num_tets()) {
       throw Error(ErrorKind::kInvalidArgument, "cell field '" + field.name + "' has " +
@@ -103,10 +107,16 @@ void write_tet_mesh(const std::filesystem::path& path, const TetMesh& mesh, cons
     unknown_extension(path, "tet mesh", supported_tet_mesh_extensions());
   }
   io::AtomicOutput out(path, ext == ".vtu");
-  if (ext == ".mesh") io::write_medit(out.stream(), points, mesh.tets());
-  if (ext == ".msh") io::write_gmsh(out.stream(), points, mesh.tets(), options.gmsh_version);
+  if (ext == ".mesh") io::write_medit(out.stream(), points, mesh.tets(), options.tet_labels);
+  if (ext == ".msh") io::write_gmsh(out.stream(), points, mesh.tets(), options.gmsh_version, options.tet_labels);
   if (ext == ".vtu") io::write_vtu(out.stream(), points, mesh.tets(), options.cell_fields);
   if (ext == ".vtk") io::write_vtk_legacy(out.stream(), points, mesh.tets(), options.cell_fields);
+  out.commit();
+}
+
+void write_text_file(const std::filesystem::path& path, std::string_view text) {
+  io::AtomicOutput out(path);
+  out.stream() << text;
   out.commit();
 }
 

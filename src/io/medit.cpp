@@ -85,7 +85,7 @@ TetMeshData read_medit(std::string_view text, const std::string& source) {
   return data;
 }
 
-void write_medit(std::ostream& out, const Points& points, const Tets& tets) {
+void write_medit(std::ostream& out, const Points& points, const Tets& tets, const std::vector<Index>& labels) {
   out << "MeshVersionFormatted 2\nDimension 3\n\nVertices\n" << points.rows() << '\n';
   for (Eigen::Index i = 0; i < points.rows(); ++i) {
     for (int k = 0; k < 3; ++k) {
@@ -96,7 +96,8 @@ void write_medit(std::ostream& out, const Points& points, const Tets& tets) {
   }
   out << "\nTetrahedra\n" << tets.rows() << '\n';
   for (Eigen::Index t = 0; t < tets.rows(); ++t) {
-    out << tets(t, 0) + 1 << ' ' << tets(t, 1) + 1 << ' ' << tets(t, 2) + 1 << ' ' << tets(t, 3) + 1 << " 0\n";
+    out << tets(t, 0) + 1 << ' ' << tets(t, 1) + 1 << ' ' << tets(t, 2) + 1 << ' ' << tets(t, 3) + 1 << ' '
+        << (labels.empty() ? 0 : labels[t]) << '\n';
   }
   out << "\nEnd\n";
 }

@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <tetcut/figures.hpp>
 #include <tetcut/generators.hpp>
 
 #include <algorithm>
@@ -279,31 +280,14 @@ INSTANTIATE_TEST_SUITE_P(Seeds, RandomSoupInAGrid, ::testing::Range(1, 41));
 
 // The paper's Figure 2: one tet sliced by 50 random triangles, many of which only partly enter it.
 TEST(CellComplex, Figure2FiftyRandomTriangles) {
-  // Each triangle lies in a random plane through a random point of the tet, around that point, with
-  // a random size: large ones slice through, small ones end inside.
-  std::mt19937_64 rng(2007);
-  std::uniform_real_distribution<double> unit(0, 1);
-  std::normal_distribution<double> gauss;
-  std::vector<CutTriangle> soup;
-  for (int i = 0; i < 50; ++i) {
-    double w[4];
-    double sum = 0;
-    for (double& x : w) sum += x = -std::log(unit(rng));
-    Vec3 centre = Vec3::Zero();
-    for (int k = 0; k < 4; ++k) centre += w[k] / sum * kCorner[k];
-    const Vec3 normal = Vec3(gauss(rng), gauss(rng), gauss(rng)).normalized();
-    const Vec3 u = normal.unitOrthogonal(), v = normal.cross(u);
-    const double radius = 0.2 + 1.3 * unit(rng);
-    const double turn = 2 * M_PI * unit(rng);
-    Vec3 corners[3];
-    for (int k = 0; k < 3; ++k) {
-      const double angle = turn + 2 * M_PI * k / 3;
-      corners[k] = centre + radius * (std::cos(angle) * u + std::sin(angle) * v);
-    }
-    soup.push_back({corners[0], corners[1], corners[2], i});
+  const TriangleSurface soup = figures::figure2_triangles();
+  std::vector<CutTriangle> triangles;
+  for (Index i = 0; i < soup.num_triangles(); ++i) {
+    triangles.push_back({soup.vertices.row(soup.triangles(i, 0)), soup.vertices.row(soup.triangles(i, 1)),
+                         soup.vertices.row(soup.triangles(i, 2)), i});
   }
-  Complex c(one_tet());
-  c.insert(soup);
+  Complex c(figures::figure2_tet());
+  c.insert(triangles);
   const std::vector<double> volumes = c.component_volumes();
   EXPECT_NEAR(total(volumes), kTetVolume, 1e-12 * kTetVolume);
   EXPECT_GT(volumes.size(), 1000u);

@@ -5,7 +5,7 @@ source "$(dirname "$0")/lib.sh"
 
 # --help works everywhere and exits 0.
 expect_exit 0 "$TETCUT" --help
-for command in grid bcc info convert demo; do
+for command in grid bcc info convert cut demo; do
   expect_exit 0 "$TETCUT" "$command" --help
   expect_stdout "Usage"
 done
@@ -80,7 +80,11 @@ ls | grep -q '\.tmp' && fail "temporary files left behind"
 # A surface cannot become a tet mesh.
 expect_exit 2 "$TETCUT" convert skin.ply skin.vtu
 
-# The default job runs without input.
+# The default job runs without input: the paper's Figures 4 and 2.
 expect_exit 0 "$TETCUT" demo -o demo
-[[ -s demo/cube.vtu && -s demo/bcc.vtu && -s demo/cube_boundary.obj ]] || fail "demo outputs missing"
+for f in figure4.vtu figure4_surface.obj figure4_report.json figure2.vtu figure2_surface.obj figure2_report.json; do
+  [[ -s demo/$f ]] || fail "demo output $f missing"
+done
+json_check demo/figure4_report.json 'j["tets_in"] == 320 and j["pieces"] == 289 and j["surface"]["closed"]'
+json_check demo/figure2_report.json 'j["tets_in"] == 1 and j["pieces"] > 1000 and abs(j["volume"] - 1 / 6) < 1e-12' 
 echo "cli_test: all checks passed"

@@ -5,6 +5,7 @@
 
 #include <tetcut/cutter.hpp>
 #include <tetcut/error.hpp>
+#include <tetcut/figures.hpp>
 #include <tetcut/generators.hpp>
 #include <tetcut/quality.hpp>
 
@@ -206,52 +207,34 @@ TEST(Cutter, TCutGivesThreePieces) {
 
 // The paper's Figure 4: 16 + 16 planes slice the 320-tet cube into 17 x 17 sticks.
 TEST(Cutter, Figure4ThirtyTwoPlanesGive289Sticks) {
-  std::vector<Triangle> planes;
+  const TetMesh mesh = figures::figure4_cube();
+  Cutter cutter(mesh);
+  cutter.cut(figures::figure4_planes());
+  const CutResult r = cutter.result();
+  EXPECT_EQ(testing::check_cut_invariants(mesh, r), "");
   std::vector<double> at = {0};
   for (int i = 1; i <= 16; ++i) at.push_back(i / 17.0);
   at.push_back(1);
-  for (int i = 1; i <= 16; ++i) planes = planes + plane(0, at[i]) + plane(1, at[i]);
-  const CutResult r = cut(cube320(), {planes});
   std::vector<double> sticks;
   for (int i = 0; i < 17; ++i) {
     for (int j = 0; j < 17; ++j) sticks.push_back((at[i + 1] - at[i]) * (at[j + 1] - at[j]));
   }
   expect_pieces(r, sticks, 1e-15);
+  // Surface: the cube and both sides of 32 unit squares.
+  EXPECT_NEAR(measure_surface(r.surface.surface).area, 6 + 2 * 32, 1e-10);
   ::testing::Test::RecordProperty("figure4_tets", r.mesh.mesh.num_tets());
-  std::printf("Figure 4: %d pieces, %d tets, %d nodes\n", r.mesh.num_pieces(), r.mesh.mesh.num_tets(), r.mesh.mesh.num_nodes());
 }
 
 // The paper's Figure 2: one tet cut into more than a thousand pieces by 50 random triangles.
 TEST(Cutter, Figure2OneTetIntoMoreThanAThousandPieces) {
-  Points p(4, 3);
-  p << 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1;
-  Tets t(1, 4);
-  t << 0, 1, 2, 3;
-  const TetMesh mesh(p, t);
-  std::mt19937_64 rng(2007);
-  std::uniform_real_distribution<double> unit(0, 1);
-  std::normal_distribution<double> gauss;
-  std::vector<Triangle> triangles;
-  for (int i = 0; i < 50; ++i) {
-    // A random plane through a random point of the tet; a random size, so some end inside.
-    double w[4], sum = 0;
-    for (double& x : w) sum += x = -std::log(unit(rng));
-    Vec3 centre = Vec3::Zero();
-    for (int k = 0; k < 4; ++k) centre += w[k] / sum * p.row(k).transpose();
-    const Vec3 normal = Vec3(gauss(rng), gauss(rng), gauss(rng)).normalized();
-    const Vec3 u = normal.unitOrthogonal(), v = normal.cross(u);
-    const double radius = 0.2 + 1.3 * unit(rng), turn = 2 * M_PI * unit(rng);
-    Triangle tri;
-    for (int k = 0; k < 3; ++k) {
-      const double angle = turn + 2 * M_PI * k / 3;
-      tri[k] = centre + radius * (std::cos(angle) * u + std::sin(angle) * v);
-    }
-    triangles.push_back(tri);
-  }
-  const CutResult r = cut(mesh, {triangles});
+  const TetMesh mesh = figures::figure2_tet();
+  Cutter cutter(mesh);
+  cutter.cut(figures::figure2_triangles());
+  const CutResult r = cutter.result();
+  EXPECT_EQ(testing::check_cut_invariants(mesh, r), "");
   EXPECT_GT(r.mesh.num_pieces(), 1000);
   EXPECT_EQ(r.mesh.mesh.num_tets(), r.mesh.num_pieces());  // one tet: every piece is one copy
-  std::printf("Figure 2: %d pieces\n", r.mesh.num_pieces());
+  ::testing::Test::RecordProperty("figure2_pieces", r.mesh.num_pieces());
 }
 
 }  // namespace
