@@ -28,6 +28,10 @@ TriangleSurface figure4_planes();
 /// triangles whose normal points along +axis.
 TriangleSurface axis_square(int axis, double value, double lo, double hi);
 
+/// A closed, outward-oriented icosphere: the icosahedron with each triangle split into four
+/// `subdivisions` times (20 * 4^subdivisions triangles), vertices pushed onto the sphere.
+TriangleSurface icosphere(const Vec3& centre, double radius, int subdivisions);
+
 /// Concatenates soups.
 TriangleSurface concatenate(const TriangleSurface& a, const TriangleSurface& b);
 

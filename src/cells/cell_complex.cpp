@@ -244,35 +244,89 @@ bool CellComplex::facet_on_plane(FacetId facet, PlaneId plane) const {
   return true;
 }
 
-bool CellComplex::facet_outside_walls(FacetId facet) const {
+int CellComplex::classify_facet(FacetId facet, PlaneId plane) const {
+  bool positive = false, negative = false;
+  for (const Corner& corner : facets_[facet].corners) {
+    const int s = registry_->side(corner.vertex, plane);
+    positive = positive || s > 0;
+    negative = negative || s < 0;
+  }
+  if (positive && negative) return 0;
+  if (positive) return 1;
+  if (negative) return -1;
+  return 2;
+}
+
+bool CellComplex::section_overlaps_triangle(CellId cell) const {
+  // The section S of the cell by the triangle's plane and the triangle T are convex polygons in
+  // that plane; their interiors meet unless a line through an edge of one separates them.
+  const CutTriangle& t = *insertion_.triangle;
+  // Edges of S lie on the cell's facet planes: T wholly outside one of them (touching allowed).
+  for (const FacetId f : cells_[cell].facets) {
+    const PlaneId plane = facets_[f].plane;
+    const int outward = facets_[f].back == cell ? 1 : -1;
+    if (registry_->side_of_input(plane, t.a) * outward >= 0 && registry_->side_of_input(plane, t.b) * outward >= 0 &&
+        registry_->side_of_input(plane, t.c) * outward >= 0) {
+      return false;
+    }
+  }
+  // Edges of T lie on the walls: S wholly outside one of them. The corners of S are the cell's
+  // vertices on the plane and the points where its edges cross it (not registered: most cells
+  // tested here are not split).
+  const PlaneId plane = insertion_.plane.id;
   for (const OrientedPlane& wall : insertion_.walls) {
     bool outside = true;
-    for (const Corner& corner : facets_[facet].corners) {
-      if (registry_->side(corner.vertex, wall.id) * wall.sign > 0) {
-        outside = false;
-        break;
+    for (const FacetId f : cells_[cell].facets) {
+      const auto& corners = facets_[f].corners;
+      const std::size_t n = corners.size();
+      for (std::size_t i = 0; i < n && outside; ++i) {
+        const VertexId u = corners[i].vertex, v = corners[(i + 1) % n].vertex;
+        const int su = registry_->side(u, plane);
+        if (su == 0) {
+          outside = registry_->side(u, wall.id) * wall.sign <= 0;
+        } else if (su * registry_->side(v, plane) < 0) {
+          const Edge& edge = edges_[corners[i].edge];
+          outside = registry_->side_of_meet(edge.line[0], edge.line[1], plane, wall.id) * wall.sign <= 0;
+        }
       }
+      if (!outside) break;
     }
-    if (outside) return true;
+    if (outside) return false;
   }
-  return false;
+  return true;
 }
 
 bool CellComplex::tet_may_be_cut(Index tet) const {
+  // The same tests as process_cell, on the four corners of a tet that has no cells yet.
   const Points& p = mesh_->rest();
-  Vec3 corners[4];
-  for (int k = 0; k < 4; ++k) corners[k] = p.row(mesh_->tets()(tet, k)).transpose();
-  int positive = 0, negative = 0;
-  for (const Vec3& x : corners) {
-    const int s = geometry::side_of_point(registry_->plane(insertion_.plane.id), x);
-    positive += s > 0;
-    negative += s < 0;
+  Vec3 x[4];
+  for (int k = 0; k < 4; ++k) x[k] = p.row(mesh_->tets()(tet, k)).transpose();
+  const geometry::Plane& plane = registry_->plane(insertion_.plane.id);
+  int side[4], positive = 0, negative = 0;
+  for (int k = 0; k < 4; ++k) {
+    side[k] = geometry::side_of_point(plane, x[k]);
+    positive += side[k] > 0;
+    negative += side[k] < 0;
   }
-  // Off the plane, or touching it in less than a face: the triangle covers nothing here.
-  if ((positive == 0 || negative == 0) && positive + negative > 1) return false;
+  if (positive == 0 || negative == 0) return positive + negative == 1;  // only a face on the plane matters
+  const CutTriangle& t = *insertion_.triangle;
+  for (int f = 0; f < 4; ++f) {
+    const auto& local = kTetFaces[f];
+    const geometry::Plane face = geometry::Plane::through(x[local[0]], x[local[1]], x[local[2]]);  // outward
+    if (geometry::side_of_point(face, t.a) >= 0 && geometry::side_of_point(face, t.b) >= 0 &&
+        geometry::side_of_point(face, t.c) >= 0) {
+      return false;
+    }
+  }
   for (const OrientedPlane& wall : insertion_.walls) {
+    const geometry::Plane& w = registry_->plane(wall.id);
     bool outside = true;
-    for (const Vec3& x : corners) outside = outside && geometry::side_of_point(registry_->plane(wall.id), x) * wall.sign <= 0;
+    for (int k = 0; k < 4 && outside; ++k) {
+      if (side[k] == 0) outside = geometry::side_of_point(w, x[k]) * wall.sign <= 0;
+      for (int j = k + 1; j < 4 && outside; ++j) {
+        if (side[k] * side[j] < 0) outside = geometry::side_of_segment_meet(x[k], x[j], plane, w) * wall.sign <= 0;
+      }
+    }
     if (outside) return false;
   }
   return true;
@@ -338,24 +392,43 @@ FacetId CellComplex::split_facet(FacetId f, PlaneId plane, CellId cell, CellId n
   const FacetId g = static_cast<FacetId>(facets_.size());
   Facet part = facets_[f];
   part.corners = std::move(negative);
-  if (part.front == cell) part.front = negative_cell;
-  if (part.back == cell) part.back = negative_cell;
+  if (cell >= 0) {
+    if (part.front == cell) part.front = negative_cell;
+    if (part.back == cell) part.back = negative_cell;
+  }
   part.next_on_mesh_face = -1;
   for (std::size_t k = 0; k + 1 < part.corners.size(); ++k) {
     auto& list = edges_[part.corners[k].edge].facets;
     std::replace(list.begin(), list.end(), f, g);
   }
   edges_[chord].facets = {f, g};
-  const Side other = facets_[f].front == cell ? facets_[f].back : facets_[f].front;
   facets_.push_back(std::move(part));
   facets_[f].corners = std::move(positive);
   if (facets_[g].mesh_face >= 0) {
     facets_[g].next_on_mesh_face = face_first_facet_[facets_[g].mesh_face];
     face_first_facet_[facets_[g].mesh_face] = g;
   }
-  if (is_cell(other)) cells_[other].facets.push_back(g);
-  touch_side(other);
+  // The new part's cells list it: in a split of `cell`, the caller adds it to the negative cell.
+  for (const Side side : {facets_[g].front, facets_[g].back}) {
+    if (cell >= 0 && side == negative_cell) continue;
+    if (is_cell(side)) cells_[side].facets.push_back(g);
+    touch_side(side);
+  }
   return g;
+}
+
+FacetId CellComplex::split_facet_in_plane(FacetId f, PlaneId plane) {
+  // Put a vertex where the line crosses the facet's boundary, in every facet around those edges.
+  for (std::size_t i = 0; i < facets_[f].corners.size(); ++i) {
+    const std::size_t n = facets_[f].corners.size();
+    const Corner corner = facets_[f].corners[i];
+    const VertexId next = facets_[f].corners[(i + 1) % n].vertex;
+    if (registry_->side(corner.vertex, plane) * registry_->side(next, plane) < 0) {
+      const Edge& edge = edges_[corner.edge];
+      insert_on_edge(corner.edge, registry_->add_point(edge.line[0], edge.line[1], plane));
+    }
+  }
+  return split_facet(f, plane, -1, -1);
 }
 
 CellId CellComplex::split(CellId cell, PlaneId plane, FacetId* section) {
@@ -489,46 +562,41 @@ void CellComplex::cover(FacetId f) {
   touch_side(facet.back);
 }
 
-bool CellComplex::process_cell(CellId cell) {
-  const PlaneId plane = insertion_.plane.id;
-  if (classify(cell, plane) != 0) {
-    // The cell only touches the plane: what matters is a facet on it, not yet covered by this
-    // triangle, and not outside the triangle's prism.
-    bool any = false;
-    for (const FacetId f : cells_[cell].facets) {
-      if (facets_[f].stamp != insertion_.stamp && facet_on_plane(f, plane) && !facet_outside_walls(f)) {
-        any = true;
-        break;
-      }
-    }
-    if (!any) return false;
-  }
-  for (const OrientedPlane& wall : insertion_.walls) {
-    if (classify(cell, wall.id) * wall.sign == -1) return false;  // outside the prism, or touching it
-  }
+bool CellComplex::cover_inside(FacetId f) {
+  // The facet lies on the triangle's plane; the triangle there is the part inside its three walls.
+  if (facets_[f].stamp == insertion_.stamp) return false;
   bool changed = false;
-  CellId inside = cell;
+  FacetId inside = f;
   for (const OrientedPlane& wall : insertion_.walls) {
-    // A part cut off by one wall may lie wholly outside the next: then the triangle misses it.
-    const int position = classify(inside, wall.id) * wall.sign;
-    if (position == -1) return changed;
+    const int position = classify_facet(inside, wall.id) * wall.sign;
+    if (position == -1) return changed;  // outside the triangle, or touching its edge
     if (position != 0) continue;
-    const CellId negative = split(inside, wall.id, nullptr);
+    const FacetId negative = split_facet_in_plane(inside, wall.id);
     changed = true;
     if (wall.sign < 0) inside = negative;
   }
-  // Inside the three walls the plane meets only the triangle: what lies on it here is covered.
-  FacetId section = -1;
-  if (split(inside, plane, &section) >= 0) {
-    cover(section);
+  cover(inside);
+  return true;
+}
+
+bool CellComplex::process_cell(CellId cell) {
+  const PlaneId plane = insertion_.plane.id;
+  if (classify(cell, plane) == 0) {
+    // The plane crosses the cell: split it there when the triangle covers part of the section.
+    if (!section_overlaps_triangle(cell)) return false;
+    FacetId section = -1;
+    split(cell, plane, &section);
+    cover_inside(section);
     return true;
   }
-  for (const FacetId f : cells_[inside].facets) {
-    if (facets_[f].stamp != insertion_.stamp && facet_on_plane(f, plane)) {
-      cover(f);
-      changed = true;
-    }
+  // The cell only touches the plane: what matters is a facet on it (a cut along an earlier cut
+  // or along a tet face).
+  std::vector<FacetId> on_plane;
+  for (const FacetId f : cells_[cell].facets) {
+    if (facets_[f].stamp != insertion_.stamp && facet_on_plane(f, plane)) on_plane.push_back(f);
   }
+  bool changed = false;
+  for (const FacetId f : on_plane) changed = cover_inside(f) || changed;
   return changed;
 }
 

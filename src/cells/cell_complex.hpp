@@ -6,14 +6,15 @@
 // and facets of refined neighbours refer to it by its tet id. This keeps the cost of a cut
 // proportional to the tets it touches, not to the size of the mesh.
 //
-// Inserting a cut triangle splits only the cells whose closure meets it: first by its three walls
-// (planes through each edge along the axis on which the triangle's normal is largest: the paper's
-// virtual triangles), keeping the outer parts as they are, then the part inside the walls by the
-// triangle's plane. The facet created on that plane lies inside the triangle, so it is "covered":
-// material does not pass through it. A cell that already has a facet on the triangle's plane, inside
-// the walls, gets that facet covered instead (cuts along earlier cuts or along tet faces). Covered
-// facets are the paper's polygon mesh of the cut surface; uncovered facets between cells of one tet
-// are where material continues.
+// Inserting a cut triangle splits by its plane only the cells whose section by that plane overlaps
+// the triangle with positive area (an exact separating-axis test). The new facet on the plane is
+// then split within the plane along the triangle's edges, and the part inside the triangle is
+// "covered": material does not pass through it. The lines of the triangle's edges are given by its
+// walls (planes through each edge along the axis on which the triangle's normal is largest: the
+// paper's virtual triangles). A cell that already has a facet on the triangle's plane gets that
+// facet split and covered the same way (cuts along earlier cuts or along tet faces). Cells stay
+// convex; a cell may have several facets on one plane. Covered facets are the paper's polygon mesh
+// of the cut surface; uncovered facets between cells of one tet are where material continues.
 //
 // The complex is conforming across the whole mesh: a facet on a mesh face is one record shared by
 // the cells of the two tets, and a point put on an edge goes into every facet around that edge
@@ -174,16 +175,27 @@ class CellComplex {
   int classify(CellId cell, PlaneId plane) const;
   /// Whether every corner of the facet lies on the plane.
   bool facet_on_plane(FacetId facet, PlaneId plane) const;
-  /// Whether every corner of the facet is on the outer side of, or on, some wall of the insertion.
-  bool facet_outside_walls(FacetId facet) const;
+  /// classify() for one facet.
+  int classify_facet(FacetId facet, PlaneId plane) const;
+  /// Whether the cell's section by the triangle's plane overlaps the triangle with positive area
+  /// (exact separating-axis test in that plane). The cell must cross the plane.
+  bool section_overlaps_triangle(CellId cell) const;
+  /// Covers the part of facet `f` (on the triangle's plane) inside the triangle, splitting the
+  /// facet along the triangle's edges within its plane. Returns whether anything changed.
+  bool cover_inside(FacetId f);
 
   /// Splits `cell` by `plane` when the plane passes through its interior. The part on the positive
   /// side keeps the id `cell`; returns the id of the negative part, or -1 when nothing was split.
   /// The new facet on the plane is returned through `section`.
   CellId split(CellId cell, PlaneId plane, FacetId* section);
   /// Splits facet f, whose corners are all on `plane` or on one side of it except that both sides
-  /// occur, into its positive part (kept as f) and its negative part (returned).
+  /// occur, into its positive part (kept as f) and its negative part (returned). In a split of
+  /// `cell`, the negative part belongs to `negative_cell` on that side; with cell = -1 the facet is
+  /// split within its plane and both parts keep both cells.
   FacetId split_facet(FacetId f, PlaneId plane, CellId cell, CellId negative_cell);
+  /// Splits a facet by a line in its plane (its intersection with `plane`), after putting the
+  /// crossing points on its edges; returns the negative part.
+  FacetId split_facet_in_plane(FacetId f, PlaneId plane);
   /// Inserts vertex w, which lies strictly inside edge e, into every facet around e.
   void insert_on_edge(EdgeId e, VertexId w);
   EdgeId add_edge(VertexId a, VertexId b, std::array<PlaneId, 2> line, Index mesh_edge);

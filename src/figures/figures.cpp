@@ -1,7 +1,9 @@
 #include <tetcut/figures.hpp>
 #include <tetcut/generators.hpp>
 
+#include <algorithm>
 #include <cmath>
+#include <map>
 #include <numbers>
 #include <random>
 
@@ -54,6 +56,44 @@ TriangleSurface axis_square(int axis, double value, double lo, double hi) {
   }
   s.triangles.resize(2, 3);
   s.triangles << 0, 1, 2, 0, 2, 3;
+  return s;
+}
+
+TriangleSurface icosphere(const Vec3& centre, double radius, int subdivisions) {
+  const double t = (1 + std::sqrt(5.0)) / 2;
+  std::vector<Vec3> v = {{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0}, {0, -1, t}, {0, 1, t},
+                         {0, -1, -t}, {0, 1, -t}, {t, 0, -1}, {t, 0, 1}, {-t, 0, -1}, {-t, 0, 1}};
+  std::vector<std::array<Index, 3>> f = {{0, 11, 5}, {0, 5, 1},  {0, 1, 7},   {0, 7, 10}, {0, 10, 11},
+                                         {1, 5, 9},  {5, 11, 4}, {11, 10, 2}, {10, 7, 6}, {7, 1, 8},
+                                         {3, 9, 4},  {3, 4, 2},  {3, 2, 6},   {3, 6, 8},  {3, 8, 9},
+                                         {4, 9, 5},  {2, 4, 11}, {6, 2, 10},  {8, 6, 7},  {9, 8, 1}};
+  for (Vec3& p : v) p.normalize();
+  for (int level = 0; level < subdivisions; ++level) {
+    // One midpoint per edge, shared by the two triangles on it.
+    std::map<std::pair<Index, Index>, Index> midpoint;
+    const auto middle = [&](Index a, Index b) {
+      const auto key = std::minmax(a, b);
+      const auto [it, inserted] = midpoint.try_emplace({key.first, key.second}, static_cast<Index>(v.size()));
+      if (inserted) v.push_back((v[a] + v[b]).normalized());
+      return it->second;
+    };
+    std::vector<std::array<Index, 3>> finer;
+    for (const auto& tri : f) {
+      const Index ab = middle(tri[0], tri[1]), bc = middle(tri[1], tri[2]), ca = middle(tri[2], tri[0]);
+      finer.push_back({tri[0], ab, ca});
+      finer.push_back({tri[1], bc, ab});
+      finer.push_back({tri[2], ca, bc});
+      finer.push_back({ab, bc, ca});
+    }
+    f = std::move(finer);
+  }
+  TriangleSurface s;
+  s.vertices.resize(static_cast<Index>(v.size()), 3);
+  for (std::size_t i = 0; i < v.size(); ++i) s.vertices.row(static_cast<Index>(i)) = (centre + radius * v[i]).transpose();
+  s.triangles.resize(static_cast<Index>(f.size()), 3);
+  for (std::size_t i = 0; i < f.size(); ++i) {
+    for (int k = 0; k < 3; ++k) s.triangles(static_cast<Index>(i), k) = f[i][k];
+  }
   return s;
 }
 

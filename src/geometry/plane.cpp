@@ -319,9 +319,7 @@ bool rounded_coordinates(const Homogeneous& h, Vec3* x) {
 Vec3 tpi_coordinates(const Plane& a, const Plane& b, const Plane& c, const Homogeneous& h) {
   Vec3 x;
   if (rounded_coordinates(h, &x)) return x;
-  const std::array<mpq_class, 3> exact = tpi_exact(a, b, c);
-  for (int k = 0; k < 3; ++k) x[k] = exact[k].get_d();
-  return x;
+  return rounded_exact(exact_tpi(exact_plane(a), exact_plane(b), exact_plane(c)));
 }
 
 std::array<mpq_class, 3> tpi_exact(const Plane& a, const Plane& b, const Plane& c) {
@@ -394,6 +392,19 @@ int exact_side(const ExactPlane& plane, const ExactPoint& point) {
   return sgn(plane[0] * point[0] + plane[1] * point[1] + plane[2] * point[2] + plane[3] * point[3]);
 }
 
+Vec3 rounded_exact(const ExactPoint& point) {
+  // X = mx 2^ex and W = mw 2^ew with mx, mw in [0.5, 1): X / W = (mx / mw) 2^(ex - ew).
+  long ew = 0;
+  const double mw = mpz_get_d_2exp(&ew, point[3].get_mpz_t());
+  Vec3 x;
+  for (int k = 0; k < 3; ++k) {
+    long ex = 0;
+    const double mx = mpz_get_d_2exp(&ex, point[k].get_mpz_t());
+    x[k] = std::ldexp(mx / mw, static_cast<int>(ex - ew));
+  }
+  return x;
+}
+
 std::array<mpq_class, 3> exact_coordinates(const ExactPoint& point) {
   std::array<mpq_class, 3> x;
   for (int k = 0; k < 3; ++k) {
@@ -401,6 +412,27 @@ std::array<mpq_class, 3> exact_coordinates(const ExactPoint& point) {
     x[k].canonicalize();  // GMP's rational functions need a positive, reduced denominator
   }
   return x;
+}
+
+int side_of_segment_meet(const Vec3& a, const Vec3& b, const Plane& p, const Plane& q) {
+  const auto value = [](const Plane& plane, const Vec3& x) {
+    const auto& c = plane.approx();
+    return c[0] * Approx::exact(x[0]) + c[1] * Approx::exact(x[1]) + c[2] * Approx::exact(x[2]) + c[3];
+  };
+  const Approx pa = value(p, a), pb = value(p, b), qa = value(q, a), qb = value(q, b);
+  int pb_sign = certain_sign(pb);
+  const int s = certain_sign(qa * pb - pa * qb);
+  if (s != 2 && pb_sign != 2) return s * pb_sign;
+  // Exact: each plane value times a positive factor (the plane's and the point's own scales).
+  const ExactPlane ep = exact_plane(p), eq = exact_plane(q);
+  const ExactPoint ea = exact_point(a), eb = exact_point(b);
+  const auto dot = [](const ExactPlane& plane, const ExactPoint& x) {
+    return mpz_class(plane[0] * x[0] + plane[1] * x[1] + plane[2] * x[2] + plane[3] * x[3]);
+  };
+  const mpz_class Pa = dot(ep, ea), Pb = dot(ep, eb), Qa = dot(eq, ea), Qb = dot(eq, eb);
+  // q(a) p(b) - p(a) q(b) = (Qa Pb - Pa Qb) / (lambda_p lambda_q W_a W_b), all factors positive.
+  pb_sign = sgn(Pb);
+  return sgn(mpz_class(Qa * Pb - Pa * Qb)) * pb_sign;
 }
 
 }  // namespace tetcut::geometry

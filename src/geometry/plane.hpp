@@ -104,15 +104,20 @@ int side_of_tpi(const Plane& a, const Plane& b, const Plane& c, const Homogeneou
 int side_of_point(const Plane& q, const Vec3& x, const Homogeneous& h);
 
 /// Largest error of a rounded coordinate from tpi_coordinates, relative to the point's largest
-/// coordinate: 2^-50, a few units in the last place. Beyond it the exact evaluation is used.
-/// Output geometry only; no decision depends on it.
-inline constexpr double kCoordinateTolerance = 0x1p-50;
+/// coordinate: 2^-40 (about 1e-12), far below anything a viewer or a simulation resolves. Beyond it
+/// the exact evaluation is used. Output geometry only; no decision depends on it.
+inline constexpr double kCoordinateTolerance = 0x1p-40;
 
 /// Coordinates of the point where a, b and c meet, correctly rounded or nearly so: from the
 /// filtered homogeneous coordinates when their error bound is tiny, otherwise from an exact
 /// rational evaluation. For output and volumes only, never for decisions.
 Vec3 tpi_coordinates(const Plane& a, const Plane& b, const Plane& c);
 Vec3 tpi_coordinates(const Plane& a, const Plane& b, const Plane& c, const Homogeneous& h);
+
+/// Side of q at the point where segment [a, b] meets plane p, for input points a and b strictly on
+/// opposite sides of p: sign(q(a) p(b) - p(a) q(b)) * sign(p(b)), from the plane values at the
+/// endpoints (x = a + t (b - a) with t = p(a) / (p(a) - p(b))). Exact.
+int side_of_segment_meet(const Vec3& a, const Vec3& b, const Plane& p, const Plane& q);
 
 /// Exact rational coordinates of the point where a, b and c meet. Slow (GMP); for the rare
 /// measurements that rounded coordinates cannot settle, such as the volume of a cell far smaller
@@ -134,6 +139,8 @@ ExactPoint exact_point(const Vec3& x);
 ExactPoint exact_tpi(const ExactPlane& a, const ExactPlane& b, const ExactPlane& c);
 /// Sign of the plane at the point: sign(n . (X, Y, Z) + d W).
 int exact_side(const ExactPlane& plane, const ExactPoint& point);
+/// Coordinates of an exact point, each within a few units in the last place (no gcd needed).
+Vec3 rounded_exact(const ExactPoint& point);
 /// Rational coordinates of an exact point.
 std::array<mpq_class, 3> exact_coordinates(const ExactPoint& point);
 

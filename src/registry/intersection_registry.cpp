@@ -118,6 +118,50 @@ const geometry::ExactPoint& IntersectionRegistry::exact_point(VertexId v) const 
   return *exact_points_[v];
 }
 
+namespace {
+
+int defining_count(const Plane& plane) { return plane.kind() == Plane::Kind::kWall ? 2 : 3; }
+
+bool defines(const Plane& plane, const Vec3& x) {
+  for (int i = 0; i < defining_count(plane); ++i) {
+    if (plane.points()[i] == x) return true;
+  }
+  return false;
+}
+
+}  // namespace
+
+bool IntersectionRegistry::on_plane_by_construction(VertexId v, PlaneId q) const {
+  const Vertex& vertex = vertices_[v];
+  const Plane& target = planes_[q];
+  if (vertex.node >= 0) return defines(target, rest_->row(vertex.node).transpose());
+  // Two of the point's planes through the same two distinct inputs a and b meet in line ab, which
+  // holds the point; three through one input x meet only at x.
+  for (int i = 0; i < 3; ++i) {
+    const Plane& a = planes_[vertex.planes[i]];
+    const Plane& b = planes_[vertex.planes[(i + 1) % 3]];
+    const Plane& c = planes_[vertex.planes[(i + 2) % 3]];
+    const Vec3* shared[3];
+    int count = 0;
+    for (int k = 0; k < defining_count(a); ++k) {
+      const Vec3& x = a.points()[k];
+      if (defines(b, x)) {
+        bool repeated = false;
+        for (int m = 0; m < count; ++m) repeated = repeated || *shared[m] == x;
+        if (!repeated) shared[count++] = &x;
+      }
+    }
+    for (int m = 0; m < count; ++m) {
+      if (!defines(target, *shared[m])) continue;
+      if (defines(c, *shared[m])) return true;  // the point is that input
+      for (int n = m + 1; n < count; ++n) {
+        if (defines(target, *shared[n])) return true;  // the point is on the line through both
+      }
+    }
+  }
+  return false;
+}
+
 int IntersectionRegistry::compute_side(VertexId v, PlaneId q) const {
   const Vertex& vertex = vertices_[v];
   if (vertex.planes[0] == q || vertex.planes[1] == q || vertex.planes[2] == q) return 0;
@@ -126,7 +170,18 @@ int IntersectionRegistry::compute_side(VertexId v, PlaneId q) const {
   const auto& h = vertex.homogeneous;
   const int s = geometry::certain_sign(p[0] * h[0] + p[1] * h[1] + p[2] * h[2] + p[3] * h[3]);
   if (s != 2) return s * vertex.orientation;
+  if (on_plane_by_construction(v, q)) return 0;
   return geometry::exact_side(exact_plane(q), exact_point(v));
+}
+
+int IntersectionRegistry::side_of_input(PlaneId q, const Vec3& x) const {
+  const auto& p = planes_[q].approx();
+  using geometry::Approx;
+  const int s = geometry::certain_sign(p[0] * Approx::exact(x[0]) + p[1] * Approx::exact(x[1]) +
+                                       p[2] * Approx::exact(x[2]) + p[3]);
+  if (s != 2) return s;
+  if (defines(planes_[q], x)) return 0;
+  return geometry::exact_side(exact_plane(q), geometry::exact_point(x));
 }
 
 int IntersectionRegistry::side(VertexId v, const Plane& q) const {
@@ -136,6 +191,15 @@ int IntersectionRegistry::side(VertexId v, const Plane& q) const {
   const int s = geometry::certain_sign(p[0] * h[0] + p[1] * h[1] + p[2] * h[2] + p[3] * h[3]);
   if (s != 2) return s * vertex.orientation;
   return geometry::exact_side(geometry::exact_plane(q), exact_point(v));
+}
+
+int IntersectionRegistry::side_of_meet(PlaneId a, PlaneId b, PlaneId c, PlaneId q) const {
+  const geometry::Homogeneous h = geometry::tpi_homogeneous(planes_[a], planes_[b], planes_[c]);
+  const auto& p = planes_[q].approx();
+  const int w = geometry::certain_sign(h[3]);
+  const int s = geometry::certain_sign(p[0] * h[0] + p[1] * h[1] + p[2] * h[2] + p[3] * h[3]);
+  if (w != 2 && w != 0 && s != 2) return s * w;
+  return geometry::exact_side(exact_plane(q), geometry::exact_tpi(exact_plane(a), exact_plane(b), exact_plane(c)));
 }
 
 int IntersectionRegistry::side(VertexId v, PlaneId q) const {
@@ -185,8 +249,7 @@ void IntersectionRegistry::compute_position(VertexId v) const {
     const geometry::ExactPoint exact = geometry::exact_tpi(geometry::exact_plane(planes_[vertex.planes[0]]),
                                                            geometry::exact_plane(planes_[vertex.planes[1]]),
                                                            geometry::exact_plane(planes_[vertex.planes[2]]));
-    const std::array<mpq_class, 3> coordinates = geometry::exact_coordinates(exact);
-    for (int k = 0; k < 3; ++k) x[k] = coordinates[k].get_d();
+    x = geometry::rounded_exact(exact);
   }
   has_position_[v] = 1;
 }

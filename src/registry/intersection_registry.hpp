@@ -70,6 +70,11 @@ class IntersectionRegistry {
   int side(VertexId v, PlaneId q) const;
   /// The same for a plane that is not stored in the registry. Exact; not memoised.
   int side(VertexId v, const geometry::Plane& q) const;
+  /// Side of q at the point where a, b and c meet, without registering that point (they must meet
+  /// in exactly one point). Exact.
+  int side_of_meet(PlaneId a, PlaneId b, PlaneId c, PlaneId q) const;
+  /// Side of q at an input point. Exact; zero at once when x defines q.
+  int side_of_input(PlaneId q, const Vec3& x) const;
 
   /// Coordinates of v, correctly rounded or nearly (geometry::tpi_coordinates). For output only.
   const Vec3& position(VertexId v) const;
@@ -93,6 +98,11 @@ class IntersectionRegistry {
 
  private:
   int compute_side(VertexId v, PlaneId q) const;
+  /// Decides that v lies on q from the input points defining the planes, when it can: a plane
+  /// passes through its defining points, and two planes through the same two points meet in the
+  /// line through them. Sound, not complete; it spares the exact path for the commonest zeros
+  /// (points on edges and corners shared by triangles of a surface).
+  bool on_plane_by_construction(VertexId v, PlaneId q) const;
   void compute_position(VertexId v) const;
   // Exact forms, computed when a filter first fails and kept: later exact tests on the same plane
   // or point are then a four-term integer dot product.
