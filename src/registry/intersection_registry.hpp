@@ -13,8 +13,8 @@
 // inside one of its edges, where no other point can be, and it recognises a point that a new triple
 // names by an exact side test returning zero.
 //
-// Not thread-safe: side tests fill caches. Positions can be filled in advance (update_positions)
-// so that parallel readers only read.
+// Not thread-safe: side tests fill caches. After update_positions(), position() and
+// exact_position() only read, and may be called concurrently.
 
 #include <tetcut/types.hpp>
 
@@ -78,7 +78,8 @@ class IntersectionRegistry {
 
   /// Coordinates of v, correctly rounded or nearly (geometry::tpi_coordinates). For output only.
   const Vec3& position(VertexId v) const;
-  /// Exact rational coordinates of v (slow: for measurements rounding cannot settle).
+  /// Exact rational coordinates of v (slow: for measurements rounding cannot settle). Uses no
+  /// cache, so it is safe to call concurrently.
   std::array<mpq_class, 3> exact_position(VertexId v) const;
   /// Bound on the error of each rounded coordinate of position(), relative to the position's
   /// largest coordinate (see geometry::tpi_coordinates).
