@@ -95,6 +95,28 @@ EdgeId CellComplex::add_edge(VertexId a, VertexId b, std::array<PlaneId, 2> line
   return id;
 }
 
+template <typename Visit>
+void CellComplex::walk_mesh_edge(Index mesh_edge, VertexId start, VertexId target, Visit&& visit) const {
+  // The edge records on a mesh edge form a path between its nodes: at each vertex, take the record
+  // that does not lead back. O(records on the edge) per step.
+  VertexId previous = -1, current = start;
+  while (current != target) {
+    EdgeId next = -1;
+    for (EdgeId e = mesh_edge_first_[mesh_edge]; e >= 0; e = edges_[e].next_on_mesh_edge) {
+      const Edge& edge = edges_[e];
+      const VertexId other = edge.a == current ? edge.b : (edge.b == current ? edge.a : -1);
+      if (other >= 0 && other != previous) {
+        next = e;
+        break;
+      }
+    }
+    if (next < 0) broken("the edge records on a mesh edge do not form a path");
+    visit(current, next);
+    previous = current;
+    current = edges_[next].a == current ? edges_[next].b : edges_[next].a;
+  }
+}
+
 void CellComplex::append_mesh_edge_chain(Index mesh_edge, Index from, Index to, Index tet, FacetId facet,
                                          std::vector<Corner>* corners) {
   const VertexId start = node_vertex(from, tet);
@@ -108,46 +130,18 @@ void CellComplex::append_mesh_edge_chain(Index mesh_edge, Index from, Index to, 
     }
     add_edge(start, target, {line[0], line[1]}, mesh_edge);
   }
-  // The edge records on a mesh edge form a path between its nodes; walk it from `from`.
-  VertexId previous = -1, current = start;
-  while (current != target) {
-    EdgeId next = -1;
-    for (EdgeId e = mesh_edge_first_[mesh_edge]; e >= 0; e = edges_[e].next_on_mesh_edge) {
-      const Edge& edge = edges_[e];
-      const VertexId other = edge.a == current ? edge.b : (edge.b == current ? edge.a : -1);
-      if (other >= 0 && other != previous) {
-        next = e;
-        break;
-      }
-    }
-    if (next < 0) broken("the edge records on a mesh edge do not form a path");
-    corners->push_back({current, next});
-    edges_[next].facets.push_back(facet);
-    previous = current;
-    current = edges_[next].a == current ? edges_[next].b : edges_[next].a;
-  }
+  walk_mesh_edge(mesh_edge, start, target, [&](VertexId from_vertex, EdgeId edge) {
+    corners->push_back({from_vertex, edge});
+    edges_[edge].facets.push_back(facet);
+  });
 }
 
 void CellComplex::mesh_edge_points(Index mesh_edge, Index from, Index to, std::vector<VertexId>* out) const {
   if (mesh_edge_first_[mesh_edge] < 0) return;
-  const VertexId target = node_vertex_[to];
-  VertexId previous = -1, current = node_vertex_[from];
-  while (true) {
-    EdgeId next = -1;
-    for (EdgeId e = mesh_edge_first_[mesh_edge]; e >= 0; e = edges_[e].next_on_mesh_edge) {
-      const Edge& edge = edges_[e];
-      const VertexId other = edge.a == current ? edge.b : (edge.b == current ? edge.a : -1);
-      if (other >= 0 && other != previous) {
-        next = e;
-        break;
-      }
-    }
-    if (next < 0) broken("the edge records on a mesh edge do not form a path");
-    previous = current;
-    current = edges_[next].a == current ? edges_[next].b : edges_[next].a;
-    if (current == target) return;
-    out->push_back(current);
-  }
+  const VertexId start = node_vertex_[from];
+  walk_mesh_edge(mesh_edge, start, node_vertex_[to], [&](VertexId vertex, EdgeId) {
+    if (vertex != start) out->push_back(vertex);
+  });
 }
 
 void CellComplex::add_face_facet(Index face, Index tet, CellId cell) {
@@ -221,19 +215,31 @@ CellId CellComplex::refine(Index tet) {
 
 // ---- Predicates on cells and facets ------------------------------------------------------------
 
-int CellComplex::classify(CellId cell, PlaneId plane) const {
+namespace {
+
+// Sides seen so far of a set of vertices relative to a plane, and what they say together.
+struct SidesSeen {
   bool positive = false, negative = false;
+  void add(int side) {
+    positive = positive || side > 0;
+    negative = negative || side < 0;
+  }
+  bool both() const { return positive && negative; }
+  // -1 all <= 0, 0 both sides, +1 all >= 0, 2 all on the plane.
+  int classification() const { return both() ? 0 : positive ? 1 : negative ? -1 : 2; }
+};
+
+}  // namespace
+
+int CellComplex::classify(CellId cell, PlaneId plane) const {
+  SidesSeen seen;
   for (const FacetId f : cells_[cell].facets) {
     for (const Corner& corner : facets_[f].corners) {
-      const int s = registry_->side(corner.vertex, plane);
-      positive = positive || s > 0;
-      negative = negative || s < 0;
-      if (positive && negative) return 0;
+      seen.add(registry_->side(corner.vertex, plane));
+      if (seen.both()) return 0;
     }
   }
-  if (positive) return 1;
-  if (negative) return -1;
-  return 2;
+  return seen.classification();
 }
 
 bool CellComplex::facet_on_plane(FacetId facet, PlaneId plane) const {
@@ -245,16 +251,9 @@ bool CellComplex::facet_on_plane(FacetId facet, PlaneId plane) const {
 }
 
 int CellComplex::classify_facet(FacetId facet, PlaneId plane) const {
-  bool positive = false, negative = false;
-  for (const Corner& corner : facets_[facet].corners) {
-    const int s = registry_->side(corner.vertex, plane);
-    positive = positive || s > 0;
-    negative = negative || s < 0;
-  }
-  if (positive && negative) return 0;
-  if (positive) return 1;
-  if (negative) return -1;
-  return 2;
+  SidesSeen seen;
+  for (const Corner& corner : facets_[facet].corners) seen.add(registry_->side(corner.vertex, plane));
+  return seen.classification();
 }
 
 bool CellComplex::section_overlaps_triangle(CellId cell) const {
@@ -417,8 +416,7 @@ FacetId CellComplex::split_facet(FacetId f, PlaneId plane, CellId cell, CellId n
   return g;
 }
 
-FacetId CellComplex::split_facet_in_plane(FacetId f, PlaneId plane) {
-  // Put a vertex where the line crosses the facet's boundary, in every facet around those edges.
+void CellComplex::mark_crossings(FacetId f, PlaneId plane) {
   for (std::size_t i = 0; i < facets_[f].corners.size(); ++i) {
     const std::size_t n = facets_[f].corners.size();
     const Corner corner = facets_[f].corners[i];
@@ -428,6 +426,10 @@ FacetId CellComplex::split_facet_in_plane(FacetId f, PlaneId plane) {
       insert_on_edge(corner.edge, registry_->add_point(edge.line[0], edge.line[1], plane));
     }
   }
+}
+
+FacetId CellComplex::split_facet_in_plane(FacetId f, PlaneId plane) {
+  mark_crossings(f, plane);
   return split_facet(f, plane, -1, -1);
 }
 
@@ -436,17 +438,7 @@ CellId CellComplex::split(CellId cell, PlaneId plane, FacetId* section) {
   const std::vector<FacetId> old_facets = cells_[cell].facets;
 
   // 1. A vertex on every edge of the cell that crosses the plane, in every facet around that edge.
-  for (const FacetId f : old_facets) {
-    for (std::size_t i = 0; i < facets_[f].corners.size(); ++i) {
-      const std::size_t n = facets_[f].corners.size();
-      const Corner corner = facets_[f].corners[i];
-      const VertexId next = facets_[f].corners[(i + 1) % n].vertex;
-      if (registry_->side(corner.vertex, plane) * registry_->side(next, plane) < 0) {
-        const Edge& edge = edges_[corner.edge];
-        insert_on_edge(corner.edge, registry_->add_point(edge.line[0], edge.line[1], plane));
-      }
-    }
-  }
+  for (const FacetId f : old_facets) mark_crossings(f, plane);
 
   // 2. The negative part, linked after the cell in its tet's list.
   const CellId negative_cell = static_cast<CellId>(cells_.size());
@@ -471,13 +463,10 @@ CellId CellComplex::split(CellId cell, PlaneId plane, FacetId* section) {
   std::vector<FacetId> positive_facets, negative_facets;
   for (const FacetId f : old_facets) {
     const bool cell_is_back = facets_[f].back == cell;
-    bool positive = false, negative = false;
-    for (const Corner& corner : facets_[f].corners) {
-      const int s = registry_->side(corner.vertex, plane);
-      positive = positive || s > 0;
-      negative = negative || s < 0;
-    }
-    if (positive && negative) {
+    SidesSeen seen;
+    for (const Corner& corner : facets_[f].corners) seen.add(registry_->side(corner.vertex, plane));
+    const bool negative = seen.negative;
+    if (seen.both()) {
       negative_facets.push_back(split_facet(f, plane, cell, negative_cell));
       positive_facets.push_back(f);
       // The chord closes the positive part: stored from its last corner to its first.

@@ -159,6 +159,10 @@ class CellComplex {
   PlaneId face_plane(Index face);
   VertexId node_vertex(Index node, Index tet);
   void add_face_facet(Index face, Index tet, CellId cell);
+  /// Calls visit(vertex, edge) for each edge record along mesh edge `mesh_edge` from vertex `start`
+  /// to vertex `target`, with the vertex it leaves from.
+  template <typename Visit>
+  void walk_mesh_edge(Index mesh_edge, VertexId start, VertexId target, Visit&& visit) const;
   /// Corners along mesh edge (from -> to), creating its first edge record when missing; registers
   /// `facet` on each edge record.
   void append_mesh_edge_chain(Index mesh_edge, Index from, Index to, Index tet, FacetId facet,
@@ -193,6 +197,8 @@ class CellComplex {
   /// `cell`, the negative part belongs to `negative_cell` on that side; with cell = -1 the facet is
   /// split within its plane and both parts keep both cells.
   FacetId split_facet(FacetId f, PlaneId plane, CellId cell, CellId negative_cell);
+  /// Puts a vertex where `plane` crosses an edge of facet f (strictly), in every facet around it.
+  void mark_crossings(FacetId f, PlaneId plane);
   /// Splits a facet by a line in its plane (its intersection with `plane`), after putting the
   /// crossing points on its edges; returns the negative part.
   FacetId split_facet_in_plane(FacetId f, PlaneId plane);

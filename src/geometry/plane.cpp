@@ -322,31 +322,6 @@ Vec3 tpi_coordinates(const Plane& a, const Plane& b, const Plane& c, const Homog
   return rounded_exact(exact_tpi(exact_plane(a), exact_plane(b), exact_plane(c)));
 }
 
-std::array<mpq_class, 3> tpi_exact(const Plane& a, const Plane& b, const Plane& c) {
-  ScaledInputs scaled;
-  scaled.include(a);
-  scaled.include(b);
-  scaled.include(c);
-  const auto ea = ExactPlanes::coefficients(a, scaled);
-  const auto eb = ExactPlanes::coefficients(b, scaled);
-  const auto ec = ExactPlanes::coefficients(c, scaled);
-  const mpz_class n[3][3] = {{ea[0], ea[1], ea[2]}, {eb[0], eb[1], eb[2]}, {ec[0], ec[1], ec[2]}};
-  const mpz_class minus_d[3] = {-ea[3], -eb[3], -ec[3]};
-  const auto h = cramer(n, minus_d);
-  std::array<mpq_class, 3> x;
-  for (int k = 0; k < 3; ++k) {
-    x[k] = mpq_class(h[k], h[3]);
-    x[k].canonicalize();  // GMP's rational functions need a positive, reduced denominator
-    // The exact planes pass through the inputs scaled by 2^scale, and so does their meeting point.
-    if (scaled.scale >= 0) {
-      mpq_div_2exp(x[k].get_mpq_t(), x[k].get_mpq_t(), static_cast<mp_bitcnt_t>(scaled.scale));
-    } else {
-      mpq_mul_2exp(x[k].get_mpq_t(), x[k].get_mpq_t(), static_cast<mp_bitcnt_t>(-scaled.scale));
-    }
-  }
-  return x;
-}
-
 ExactPlane exact_plane(const Plane& plane) {
   ScaledInputs scaled;
   scaled.include(plane);

@@ -119,11 +119,6 @@ Vec3 tpi_coordinates(const Plane& a, const Plane& b, const Plane& c, const Homog
 /// endpoints (x = a + t (b - a) with t = p(a) / (p(a) - p(b))). Exact.
 int side_of_segment_meet(const Vec3& a, const Vec3& b, const Plane& p, const Plane& q);
 
-/// Exact rational coordinates of the point where a, b and c meet. Slow (GMP); for the rare
-/// measurements that rounded coordinates cannot settle, such as the volume of a cell far smaller
-/// than the rounding of its corners.
-std::array<mpq_class, 3> tpi_exact(const Plane& a, const Plane& b, const Plane& c);
-
 // Exact forms for caching. Signs of the predicates do not change when a plane's coefficients, or
 // a point's homogeneous coordinates, are multiplied by a positive number, so each plane and each
 // point is scaled to integers on its own.

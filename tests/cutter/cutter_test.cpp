@@ -19,20 +19,8 @@
 namespace tetcut {
 namespace {
 
-using Triangle = std::array<Vec3, 3>;
+using testing::Triangle;
 
-TriangleSurface soup(const std::vector<Triangle>& triangles) {
-  TriangleSurface s;
-  s.vertices.resize(static_cast<Index>(3 * triangles.size()), 3);
-  s.triangles.resize(static_cast<Index>(triangles.size()), 3);
-  for (std::size_t i = 0; i < triangles.size(); ++i) {
-    for (int k = 0; k < 3; ++k) {
-      s.vertices.row(static_cast<Index>(3 * i + k)) = triangles[i][k].transpose();
-      s.triangles(static_cast<Index>(i), k) = static_cast<Index>(3 * i + k);
-    }
-  }
-  return s;
-}
 
 // The plane {x[axis] = value} over [-1, 2]^2, as two triangles.
 std::vector<Triangle> plane(int axis, double value) {
@@ -53,7 +41,7 @@ std::vector<Triangle> operator+(std::vector<Triangle> a, const std::vector<Trian
 
 CutResult cut(const TetMesh& mesh, const std::vector<std::vector<Triangle>>& batches) {
   Cutter cutter(mesh);
-  for (const auto& batch : batches) cutter.cut(soup(batch));
+  for (const auto& batch : batches) cutter.cut(testing::soup(batch));
   CutResult result = cutter.result();
   EXPECT_EQ(testing::check_cut_invariants(mesh, result), "");
   return result;
@@ -147,7 +135,7 @@ TEST(Cutter, ACornerLyingExactlyOnAnotherCut) {
 TEST(Cutter, ZeroAreaTrianglesAreSkippedAndReported) {
   const TetMesh mesh = make_grid(Box{}, {2, 2, 2}, 5);
   Cutter cutter(mesh);
-  const CutBatchReport report = cutter.cut(soup({{Vec3(0, 0, 0), Vec3(1, 1, 1), Vec3(0.5, 0.5, 0.5)},
+  const CutBatchReport report = cutter.cut(testing::soup({{Vec3(0, 0, 0), Vec3(1, 1, 1), Vec3(0.5, 0.5, 0.5)},
                                                  {Vec3(0.2, 0.3, 0.1), Vec3(0.2, 0.3, 0.1), Vec3(0.9, 0.1, 0.5)},
                                                  {Vec3(-1, 0.5, 0.3), Vec3(2, 0.5, 0.3), Vec3(0.5, 0.5, 3)}}));
   EXPECT_EQ(report.degenerate, (std::vector<Index>{0, 1}));
@@ -159,7 +147,7 @@ TEST(Cutter, ZeroAreaTrianglesAreSkippedAndReported) {
 
 TEST(Cutter, NonFiniteCornersAreRejectedWithoutChangingAnything) {
   Cutter cutter(make_grid(Box{}, {1, 1, 1}, 5));
-  TriangleSurface bad = soup(plane(2, 0.5));
+  TriangleSurface bad = testing::soup(plane(2, 0.5));
   bad.vertices(4, 1) = std::nan("");
   EXPECT_THROW(cutter.cut(bad), Error);
   EXPECT_EQ(cutter.result().mesh.num_pieces(), 1);

@@ -17,7 +17,7 @@
 namespace tetcut {
 namespace {
 
-using Triangle = std::array<Vec3, 3>;
+using testing::Triangle;
 
 class SoupMaker {
  public:
@@ -106,18 +106,6 @@ class SoupMaker {
   std::mt19937_64 rng_;
 };
 
-TriangleSurface as_surface(const std::vector<Triangle>& triangles) {
-  TriangleSurface s;
-  s.vertices.resize(static_cast<Index>(3 * triangles.size()), 3);
-  s.triangles.resize(static_cast<Index>(triangles.size()), 3);
-  for (std::size_t i = 0; i < triangles.size(); ++i) {
-    for (int k = 0; k < 3; ++k) {
-      s.vertices.row(static_cast<Index>(3 * i + k)) = triangles[i][k].transpose();
-      s.triangles(static_cast<Index>(i), k) = static_cast<Index>(3 * i + k);
-    }
-  }
-  return s;
-}
 
 struct Summary {
   Index pieces, copies, nodes;
@@ -130,7 +118,7 @@ Summary cut_and_check(const TetMesh& mesh, const std::vector<Triangle>& soup, in
   // Split the soup into `batches` consecutive batches: cutting in batches must not matter either.
   const std::size_t per = (soup.size() + static_cast<std::size_t>(batches) - 1) / static_cast<std::size_t>(batches);
   for (std::size_t i = 0; i < soup.size(); i += per) {
-    cutter.cut(as_surface({soup.begin() + static_cast<std::ptrdiff_t>(i),
+    cutter.cut(testing::soup({soup.begin() + static_cast<std::ptrdiff_t>(i),
                            soup.begin() + static_cast<std::ptrdiff_t>(std::min(soup.size(), i + per))}));
   }
   const CutResult r = cutter.result();

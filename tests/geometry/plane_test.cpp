@@ -47,6 +47,25 @@ std::array<mpq_class, 4> reference_plane(const Plane& plane) {
   return c;
 }
 
+// Reference: the exact point where three planes meet, by Cramer's rule over the rationals.
+std::array<mpq_class, 3> reference_point(const Plane& a, const Plane& b, const Plane& c) {
+  const auto pa = reference_plane(a), pb = reference_plane(b), pc = reference_plane(c);
+  const auto det3 = [](const Q3& r0, const Q3& r1, const Q3& r2) -> mpq_class {
+    return r0[0] * (r1[1] * r2[2] - r1[2] * r2[1]) - r0[1] * (r1[0] * r2[2] - r1[2] * r2[0]) +
+           r0[2] * (r1[0] * r2[1] - r1[1] * r2[0]);
+  };
+  const Q3 rows[3] = {{pa[0], pa[1], pa[2]}, {pb[0], pb[1], pb[2]}, {pc[0], pc[1], pc[2]}};
+  const Q3 rhs = {-pa[3], -pb[3], -pc[3]};
+  const mpq_class det = det3(rows[0], rows[1], rows[2]);
+  std::array<mpq_class, 3> x;
+  for (int k = 0; k < 3; ++k) {
+    Q3 m[3] = {rows[0], rows[1], rows[2]};
+    for (int r = 0; r < 3; ++r) m[r][k] = rhs[r];
+    x[k] = det3(m[0], m[1], m[2]) / det;
+  }
+  return x;
+}
+
 // Reference: the exact point where three planes meet, and the side of q there.
 int reference_side(const Plane& a, const Plane& b, const Plane& c, const Plane& q) {
   const auto pa = reference_plane(a), pb = reference_plane(b), pc = reference_plane(c), pq = reference_plane(q);
@@ -206,7 +225,7 @@ TEST_F(PlaneTest, ExactFormsAreScaledCopies) {
     const ExactPoint point = exact_tpi(exact_plane(planes[0]), exact_plane(planes[1]), exact_plane(planes[2]));
     ASSERT_GT(point[3], 0);
     const auto x = exact_coordinates(point);
-    const auto reference = tpi_exact(planes[0], planes[1], planes[2]);
+    const auto reference = reference_point(planes[0], planes[1], planes[2]);
     for (int k = 0; k < 3; ++k) ASSERT_EQ(x[k], reference[k]);
     const Plane q = Plane::through(random_point(1), random_point(1), random_point(1));
     ASSERT_EQ(exact_side(exact_plane(q), point), reference_side(planes[0], planes[1], planes[2], q));

@@ -31,6 +31,19 @@ std::string describe(const std::string& what, double a, double b) {
 
 }  // namespace
 
+TriangleSurface soup(const std::vector<Triangle>& triangles) {
+  TriangleSurface s;
+  s.vertices.resize(static_cast<Index>(3 * triangles.size()), 3);
+  s.triangles.resize(static_cast<Index>(triangles.size()), 3);
+  for (std::size_t i = 0; i < triangles.size(); ++i) {
+    for (int k = 0; k < 3; ++k) {
+      s.vertices.row(static_cast<Index>(3 * i + k)) = triangles[i][k].transpose();
+      s.triangles(static_cast<Index>(i), k) = static_cast<Index>(3 * i + k);
+    }
+  }
+  return s;
+}
+
 std::string check_cut_invariants(const TetMesh& input, const CutResult& result) {
   const CutMesh& cut = result.mesh;
   const Index copies = cut.mesh.num_tets();

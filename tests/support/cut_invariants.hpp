@@ -3,9 +3,16 @@
 
 #include <tetcut/cutter.hpp>
 
+#include <array>
 #include <string>
+#include <vector>
 
 namespace tetcut::testing {
+
+using Triangle = std::array<Vec3, 3>;
+
+/// A triangle soup with three vertices of its own per triangle.
+TriangleSurface soup(const std::vector<Triangle>& triangles);
 
 /// Empty when all hold, else the first violation:
 ///  - every copy holds material, and the piece volumes add up to the input's volume (relative
