@@ -101,20 +101,31 @@ VertexId IntersectionRegistry::add_node(Index node, PlaneId a, PlaneId b, PlaneI
 }
 
 const geometry::ExactPlane& IntersectionRegistry::exact_plane(PlaneId p) const {
-  if (exact_planes_.size() <= static_cast<std::size_t>(p)) exact_planes_.resize(planes_.size());
-  if (!exact_planes_[p]) exact_planes_[p] = std::make_unique<geometry::ExactPlane>(geometry::exact_plane(planes_[p]));
+  {
+    const std::lock_guard<std::mutex> lock(exact_mutex_);
+    if (exact_planes_.size() <= static_cast<std::size_t>(p)) exact_planes_.resize(planes_.size());
+    if (exact_planes_[p]) return *exact_planes_[p];
+  }
+  // Computed outside the lock; if another thread stored it meanwhile, keep theirs.
+  auto computed = std::make_unique<geometry::ExactPlane>(geometry::exact_plane(planes_[p]));
+  const std::lock_guard<std::mutex> lock(exact_mutex_);
+  if (!exact_planes_[p]) exact_planes_[p] = std::move(computed);
   return *exact_planes_[p];
 }
 
 const geometry::ExactPoint& IntersectionRegistry::exact_point(VertexId v) const {
-  if (exact_points_.size() <= static_cast<std::size_t>(v)) exact_points_.resize(vertices_.size());
-  if (!exact_points_[v]) {
-    const Vertex& vertex = vertices_[v];
-    exact_points_[v] = std::make_unique<geometry::ExactPoint>(
-        vertex.node >= 0 ? geometry::exact_point(rest_->row(vertex.node).transpose())
-                         : geometry::exact_tpi(exact_plane(vertex.planes[0]), exact_plane(vertex.planes[1]),
-                                               exact_plane(vertex.planes[2])));
+  {
+    const std::lock_guard<std::mutex> lock(exact_mutex_);
+    if (exact_points_.size() <= static_cast<std::size_t>(v)) exact_points_.resize(vertices_.size());
+    if (exact_points_[v]) return *exact_points_[v];
   }
+  const Vertex& vertex = vertices_[v];
+  auto computed = std::make_unique<geometry::ExactPoint>(
+      vertex.node >= 0 ? geometry::exact_point(rest_->row(vertex.node).transpose())
+                       : geometry::exact_tpi(exact_plane(vertex.planes[0]), exact_plane(vertex.planes[1]),
+                                             exact_plane(vertex.planes[2])));
+  const std::lock_guard<std::mutex> lock(exact_mutex_);
+  if (!exact_points_[v]) exact_points_[v] = std::move(computed);
   return *exact_points_[v];
 }
 

@@ -13,8 +13,10 @@
 // inside one of its edges, where no other point can be, and it recognises a point that a new triple
 // names by an exact side test returning zero.
 //
-// Not thread-safe: side tests fill caches. After update_positions(), position() and
-// exact_position() only read, and may be called concurrently.
+// Threads: insertion (add_*, begin_memo/end_memo, and side tests while a memo is active) is
+// sequential. Outside an insertion, side tests may run concurrently: their exact caches are filled
+// under a lock (the exact path is rare). After update_positions(), position() and exact_position()
+// only read, and may be called concurrently too.
 
 #include <tetcut/types.hpp>
 
@@ -23,6 +25,7 @@
 #include <functional>
 #include <initializer_list>
 #include <memory>
+#include <mutex>
 #include <unordered_map>
 #include <vector>
 
@@ -121,6 +124,7 @@ class IntersectionRegistry {
   const Points* rest_;
   std::vector<geometry::Plane> planes_;
   std::vector<Vertex> vertices_;
+  mutable std::mutex exact_mutex_;  // guards the two caches below
   mutable std::vector<std::unique_ptr<geometry::ExactPlane>> exact_planes_;
   mutable std::vector<std::unique_ptr<geometry::ExactPoint>> exact_points_;
   mutable std::vector<Vec3> positions_;

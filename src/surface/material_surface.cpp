@@ -1,6 +1,7 @@
 #include "surface/material_surface.hpp"
 
 #include <Eigen/LU>
+#include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <limits>
@@ -32,125 +33,95 @@ struct VertexKeyHash {
   }
 };
 
-class SurfaceBuilder {
+// One polygon of the surface before its vertices get ids: corners as keys, triangles as corner
+// index triples.
+struct Polygon {
+  Index copy = -1;
+  std::int64_t source = 0;
+  std::vector<VertexKey> keys;
+  std::vector<std::int64_t> points;     // per corner: the point (see VertexKey::point)
+  std::vector<std::uint8_t> zero_mask;  // per corner: bit k set when weight k is exactly zero
+  std::vector<std::array<int, 3>> triangles;
+};
+
+// Computes keys of polygon corners; safe to run concurrently (side tests are, outside insertion).
+class Keys {
  public:
-  SurfaceBuilder(const CellComplex& complex, const connectivity::TetCopies& copies)
+  Keys(const CellComplex& complex, const connectivity::TetCopies& copies)
       : complex_(complex), copies_(copies), mesh_(complex.mesh()) {}
 
-  // Surface vertex for registry vertex v in tet copy `copy`.
-  Index vertex(VertexId v, Index copy) {
-    const std::uint64_t cache_key = (static_cast<std::uint64_t>(static_cast<std::uint32_t>(v)) << 32) |
-                                    static_cast<std::uint32_t>(copy);
-    const auto cached = by_vertex_and_copy_.find(cache_key);
-    if (cached != by_vertex_and_copy_.end()) return cached->second;
+  // Corner for registry vertex v in tet copy `copy`.
+  void add_vertex(VertexId v, Index copy, Polygon* polygon) const {
     const registry::IntersectionRegistry& reg = complex_.registry();
-    const Index tet = copies_.copy_tet[copy];
     const Index node = reg.vertex(v).node;
-    Index id;
     if (node >= 0) {
-      id = node_vertex(node, copy);
-    } else {
-      // Weight k vanishes exactly where the point lies on the face opposite node k. Faces of refined
-      // tets have registry planes (cached exact forms); others are built here.
-      const Points& rest = mesh_.rest();
-      const Tets& tets = mesh_.tets();
-      bool zero[4];
-      for (int k = 0; k < 4; ++k) {
-        const PlaneId plane = complex_.face_plane_id(mesh_.adjacency().tet_faces(tet, k));
-        if (plane >= 0) {
-          zero[k] = reg.side(v, plane) == 0;
-        } else {
-          const auto& f = kTetFaces[k];
-          zero[k] = reg.side(v, geometry::Plane::through(rest.row(tets(tet, f[0])).transpose(),
-                                                        rest.row(tets(tet, f[1])).transpose(),
-                                                        rest.row(tets(tet, f[2])).transpose())) == 0;
-        }
-      }
-      VertexKey key{mesh_.num_nodes() + static_cast<std::int64_t>(v), {-1, -1, -1, -1}};
-      for (int k = 0; k < 4; ++k) key.nodes[k] = zero[k] ? -1 : copies_.copy_nodes(copy, k);
-      std::sort(key.nodes.begin(), key.nodes.end());
-      id = find_or_add(key, reg.position(v), copy, zero);
+      add_node(node, copy, polygon);
+      return;
     }
-    by_vertex_and_copy_.emplace(cache_key, id);
-    return id;
+    // Weight k vanishes exactly where the point lies on the face opposite node k. Faces of refined
+    // tets have registry planes (cached exact forms); others are built here.
+    const Index tet = copies_.copy_tet[copy];
+    const Points& rest = mesh_.rest();
+    const Tets& tets = mesh_.tets();
+    std::uint8_t mask = 0;
+    for (int k = 0; k < 4; ++k) {
+      const PlaneId plane = complex_.face_plane_id(mesh_.adjacency().tet_faces(tet, k));
+      int side;
+      if (plane >= 0) {
+        side = reg.side(v, plane);
+      } else {
+        const auto& f = kTetFaces[k];
+        side = reg.side(v, geometry::Plane::through(rest.row(tets(tet, f[0])).transpose(),
+                                                    rest.row(tets(tet, f[1])).transpose(),
+                                                    rest.row(tets(tet, f[2])).transpose()));
+      }
+      if (side == 0) mask = static_cast<std::uint8_t>(mask | (1u << k));
+    }
+    VertexKey key{mesh_.num_nodes() + static_cast<std::int64_t>(v), {-1, -1, -1, -1}};
+    for (int k = 0; k < 4; ++k) key.nodes[k] = (mask >> k) & 1u ? -1 : copies_.copy_nodes(copy, k);
+    std::sort(key.nodes.begin(), key.nodes.end());
+    polygon->keys.push_back(key);
+    polygon->points.push_back(key.point);
+    polygon->zero_mask.push_back(mask);
   }
 
-  // Surface vertex for mesh node `node` in tet copy `copy`.
-  Index node_vertex(Index node, Index copy) {
+  // Corner for mesh node `node` in tet copy `copy`.
+  void add_node(Index node, Index copy, Polygon* polygon) const {
     const Index tet = copies_.copy_tet[copy];
-    bool zero[4];
+    std::uint8_t mask = 0;
     int local = 0;
     for (int k = 0; k < 4; ++k) {
-      zero[k] = mesh_.tets()(tet, k) != node;
-      if (!zero[k]) local = k;
+      if (mesh_.tets()(tet, k) == node) {
+        local = k;
+      } else {
+        mask = static_cast<std::uint8_t>(mask | (1u << k));
+      }
     }
-    const VertexKey key{node, {-1, -1, -1, copies_.copy_nodes(copy, local)}};
-    return find_or_add(key, mesh_.rest().row(node).transpose(), copy, zero);
-  }
-
-  void add_triangle(Index a, Index b, Index c, std::int64_t source, Index copy) {
-    triangles_.push_back({a, b, c});
-    sources_.push_back(source);
-    triangle_tets_.push_back(copy);
-  }
-
-  MaterialSurface finish() {
-    MaterialSurface s;
-    s.surface.vertices.resize(static_cast<Index>(positions_.size()), 3);
-    s.vertex_weights.resize(static_cast<Index>(positions_.size()), 4);
-    for (std::size_t i = 0; i < positions_.size(); ++i) {
-      s.surface.vertices.row(static_cast<Index>(i)) = positions_[i].transpose();
-      s.vertex_weights.row(static_cast<Index>(i)) = weights_[i].transpose();
-    }
-    s.surface.triangles.resize(static_cast<Index>(triangles_.size()), 3);
-    for (std::size_t i = 0; i < triangles_.size(); ++i) {
-      for (int k = 0; k < 3; ++k) s.surface.triangles(static_cast<Index>(i), k) = triangles_[i][k];
-    }
-    s.vertex_tet = std::move(vertex_tets_);
-    s.triangle_source = std::move(sources_);
-    s.triangle_tet = std::move(triangle_tets_);
-    return s;
+    polygon->keys.push_back(VertexKey{node, {-1, -1, -1, copies_.copy_nodes(copy, local)}});
+    polygon->points.push_back(node);
+    polygon->zero_mask.push_back(mask);
   }
 
  private:
-  Index find_or_add(const VertexKey& key, const Vec3& position, Index copy, const bool (&zero)[4]) {
-    const auto [it, inserted] = by_key_.try_emplace(key, static_cast<Index>(positions_.size()));
-    if (!inserted) return it->second;
-    positions_.push_back(position);
-    vertex_tets_.push_back(copy);
-    weights_.push_back(barycentric(copies_.copy_tet[copy], position, zero));
-    return it->second;
-  }
-
-  // Barycentric weights of p in the rest tet, with the weights known to vanish set to exactly zero.
-  Eigen::Vector4d barycentric(Index tet, const Vec3& p, const bool (&zero)[4]) const {
-    const Points& rest = mesh_.rest();
-    const Tets& tets = mesh_.tets();
-    const Vec3 r0 = rest.row(tets(tet, 0)).transpose();
-    Eigen::Matrix3d edges;
-    for (int k = 0; k < 3; ++k) edges.col(k) = rest.row(tets(tet, k + 1)).transpose() - r0;
-    const Vec3 w = edges.partialPivLu().solve(p - r0);
-    Eigen::Vector4d weights(1 - w.sum(), w[0], w[1], w[2]);
-    double sum = 0;
-    for (int k = 0; k < 4; ++k) {
-      if (zero[k]) weights[k] = 0;
-      sum += weights[k];
-    }
-    return weights / sum;
-  }
-
   const CellComplex& complex_;
   const connectivity::TetCopies& copies_;
   const TetMesh& mesh_;
-  std::unordered_map<std::uint64_t, Index> by_vertex_and_copy_;
-  std::unordered_map<VertexKey, Index, VertexKeyHash> by_key_;
-  std::vector<Vec3> positions_;
-  std::vector<Eigen::Vector4d> weights_;
-  std::vector<Index> vertex_tets_;
-  std::vector<std::array<Index, 3>> triangles_;
-  std::vector<std::int64_t> sources_;
-  std::vector<Index> triangle_tets_;
 };
+
+// Barycentric weights of p in the rest tet, with the weights known to vanish set to exactly zero.
+Eigen::Vector4d barycentric(const TetMesh& mesh, Index tet, const Vec3& p, std::uint8_t zero_mask) {
+  const Points& rest = mesh.rest();
+  const Tets& tets = mesh.tets();
+  const Vec3 r0 = rest.row(tets(tet, 0)).transpose();
+  Eigen::Matrix3d edges;
+  for (int k = 0; k < 3; ++k) edges.col(k) = rest.row(tets(tet, k + 1)).transpose() - r0;
+  const Vec3 w = edges.partialPivLu().solve(p - r0);
+  Eigen::Vector4d weights(1 - w.sum(), w[0], w[1], w[2]);
+  for (int k = 0; k < 4; ++k) {
+    if ((zero_mask >> k) & 1u) weights[k] = 0;
+  }
+  return weights / weights.sum();
+}
 
 // Source of an uncovered facet on the material's boundary: the mesh face it lies on.
 std::int64_t face_source(Index face) { return -1 - static_cast<std::int64_t>(face); }
@@ -209,74 +180,150 @@ MaterialSurface extract_material_surface(const CellComplex& complex, const compo
                                          const connectivity::TetCopies& copies) {
   const TetMesh& mesh = complex.mesh();
   const TetAdjacency& adj = mesh.adjacency();
-  complex.registry().update_positions();
-  SurfaceBuilder builder(complex, copies);
+  const registry::IntersectionRegistry& reg = complex.registry();
+  reg.update_positions();
+  const Keys keys(complex, copies);
   const auto copy_on = [&](Side s) -> Index {
     if (cells::is_cell(s)) return copies.copy_of(complex.cells()[s].tet, components.cell_component[s]);
     return copies.first_copy[cells::unrefined_tet(s)];
   };
 
-  // Facets of refined tets.
-  std::vector<std::array<int, 3>> triangles;
+  // 1. Polygons, in parallel. Slot 2f (back side) and 2f + 1 (front side) of facet f, then two
+  //    per mesh face for the whole faces of unrefined tets. A first pass says which slots hold a
+  //    polygon; only those are allocated, in slot order, so the result does not depend on
+  //    scheduling.
+  const auto& facets = complex.facets();
+  const std::size_t num_facets = facets.size();
+  const Index num_faces = adj.num_faces();
+  const Tets& tets = mesh.tets();
+  const auto facet_side_has_polygon = [&](std::size_t f, bool front) {
+    const Facet& facet = facets[f];
+    const Side side = front ? facet.front : facet.back;
+    const Side other = front ? facet.back : facet.front;
+    return complex.side_is_material(side) && (facet.covered() || !complex.side_is_material(other));
+  };
+  const auto face_side_has_polygon = [&](Index face, std::size_t i) {
+    if (complex.first_facet_on_face(face) >= 0) return false;
+    const auto around = adj.tets_of_face(face);
+    if (i >= around.size() || !complex.tet_material(around[i])) return false;
+    bool exposed = around.size() == 1;
+    for (const Index other : around) exposed = exposed || (other != around[i] && !complex.tet_material(other));
+    return exposed;
+  };
+  const std::size_t num_slots = 2 * num_facets + 2 * static_cast<std::size_t>(num_faces);
+  std::vector<std::int64_t> slot_index(num_slots + 1, 0);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, num_slots, 1024), [&](const auto& range) {
+    for (std::size_t slot = range.begin(); slot != range.end(); ++slot) {
+      const bool has = slot < 2 * num_facets
+                           ? facet_side_has_polygon(slot / 2, slot % 2 == 1)
+                           : face_side_has_polygon(static_cast<Index>((slot - 2 * num_facets) / 2), slot % 2);
+      slot_index[slot + 1] = has ? 1 : 0;
+    }
+  });
+  for (std::size_t slot = 0; slot < num_slots; ++slot) slot_index[slot + 1] += slot_index[slot];
+  std::vector<Polygon> polygons(static_cast<std::size_t>(slot_index[num_slots]));
+  const auto polygon_at = [&](std::size_t slot) -> Polygon* {
+    return slot_index[slot + 1] > slot_index[slot] ? &polygons[static_cast<std::size_t>(slot_index[slot])] : nullptr;
+  };
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, num_facets, 256), [&](const auto& range) {
+    for (std::size_t f = range.begin(); f != range.end(); ++f) {
+      const Facet& facet = facets[f];
+      for (const bool front : {false, true}) {
+        Polygon* polygon = polygon_at(2 * f + (front ? 1 : 0));
+        if (polygon == nullptr) continue;
+        polygon->copy = copy_on(front ? facet.front : facet.back);
+        polygon->source = facet.covered() ? facet.cut
+                          : facet.mesh_face >= 0 ? face_source(facet.mesh_face)
+                                                 : std::numeric_limits<std::int64_t>::min();
+        // Stored order is outward for the cell behind the facet.
+        triangulate_facet(complex, facet, front, &polygon->triangles);
+        for (const Corner& corner : facet.corners) keys.add_vertex(corner.vertex, polygon->copy, polygon);
+      }
+    }
+  });
+  tbb::parallel_for(tbb::blocked_range<Index>(0, num_faces, 256), [&](const auto& range) {
+    std::vector<VertexId> points;
+    for (Index face = range.begin(); face != range.end(); ++face) {
+      for (std::size_t i = 0; i < 2; ++i) {
+        Polygon* polygon = polygon_at(2 * num_facets + 2 * static_cast<std::size_t>(face) + i);
+        if (polygon == nullptr) continue;
+        // The face's polygon: its nodes in outward order, and the points refined tets around its
+        // edges have put on them.
+        const Index tet = adj.tets_of_face(face)[i];
+        int local = 0;
+        while (adj.tet_faces(tet, local) != face) ++local;
+        polygon->copy = copies.first_copy[tet];
+        polygon->source = face_source(face);
+        std::vector<std::uint8_t> strict;
+        for (int k = 0; k < 3; ++k) {
+          const Index from = tets(tet, kTetFaces[local][k]), to = tets(tet, kTetFaces[local][(k + 1) % 3]);
+          keys.add_node(from, polygon->copy, polygon);
+          strict.push_back(1);
+          Index mesh_edge = -1;
+          for (int e = 0; e < 6; ++e) {
+            const Index a = tets(tet, kTetEdges[e][0]), b = tets(tet, kTetEdges[e][1]);
+            if ((a == from && b == to) || (a == to && b == from)) mesh_edge = adj.tet_edges(tet, e);
+          }
+          points.clear();
+          complex.mesh_edge_points(mesh_edge, from, to, &points);
+          for (const VertexId v : points) {
+            keys.add_vertex(v, polygon->copy, polygon);
+            strict.push_back(0);
+          }
+        }
+        triangulate_convex_polygon(std::move(strict), false, &polygon->triangles);
+      }
+    }
+  });
+
+  // 2. Vertex ids in polygon order (sequential, so ids are deterministic).
+  std::unordered_map<VertexKey, Index, VertexKeyHash> id_of;
+  struct NewVertex {
+    std::int64_t point;
+    Index copy;
+    std::uint8_t zero_mask;
+  };
+  std::vector<NewVertex> vertices;
+  MaterialSurface result;
+  std::vector<std::array<Index, 3>> triangles;
   std::vector<Index> ids;
-  for (const Facet& facet : complex.facets()) {
-    for (const bool front : {false, true}) {
-      const Side side = front ? facet.front : facet.back;
-      const Side other = front ? facet.back : facet.front;
-      if (!complex.side_is_material(side) || (!facet.covered() && complex.side_is_material(other))) continue;
-      const Index copy = copy_on(side);
-      // Stored order is outward for the cell behind the facet.
-      triangles.clear();
-      triangulate_facet(complex, facet, front, &triangles);
-      ids.clear();
-      for (const Corner& corner : facet.corners) ids.push_back(builder.vertex(corner.vertex, copy));
-      const std::int64_t source = facet.covered() ? facet.cut
-                                  : facet.mesh_face >= 0 ? face_source(facet.mesh_face)
-                                                         : std::numeric_limits<std::int64_t>::min();
-      for (const auto& t : triangles) builder.add_triangle(ids[t[0]], ids[t[1]], ids[t[2]], source, copy);
+  for (const Polygon& polygon : polygons) {
+    ids.clear();
+    for (std::size_t c = 0; c < polygon.keys.size(); ++c) {
+      const auto [it, inserted] = id_of.try_emplace(polygon.keys[c], static_cast<Index>(vertices.size()));
+      if (inserted) vertices.push_back({polygon.points[c], polygon.copy, polygon.zero_mask[c]});
+      ids.push_back(it->second);
+    }
+    for (const auto& t : polygon.triangles) {
+      triangles.push_back({ids[t[0]], ids[t[1]], ids[t[2]]});
+      result.triangle_source.push_back(polygon.source);
+      result.triangle_tet.push_back(polygon.copy);
     }
   }
 
-  // Whole faces between unrefined tets, or of an unrefined tet on the boundary.
-  const Tets& tets = mesh.tets();
-  std::vector<VertexId> points;
-  for (Index face = 0; face < adj.num_faces(); ++face) {
-    if (complex.first_facet_on_face(face) >= 0) continue;
-    const auto around = adj.tets_of_face(face);
-    for (const Index tet : around) {
-      if (!complex.tet_material(tet)) continue;
-      bool exposed = around.size() == 1;
-      for (const Index other : around) exposed = exposed || (other != tet && !complex.tet_material(other));
-      if (!exposed) continue;
-      // The face's polygon: its nodes in outward order, and the points refined tets around its
-      // edges have put on them.
-      int local = 0;
-      while (adj.tet_faces(tet, local) != face) ++local;
-      const Index copy = copies.first_copy[tet];
-      ids.clear();
-      std::vector<std::uint8_t> strict;
-      for (int k = 0; k < 3; ++k) {
-        const Index from = tets(tet, kTetFaces[local][k]), to = tets(tet, kTetFaces[local][(k + 1) % 3]);
-        ids.push_back(builder.node_vertex(from, copy));
-        strict.push_back(1);
-        Index mesh_edge = -1;
-        for (int e = 0; e < 6; ++e) {
-          const Index a = tets(tet, kTetEdges[e][0]), b = tets(tet, kTetEdges[e][1]);
-          if ((a == from && b == to) || (a == to && b == from)) mesh_edge = adj.tet_edges(tet, e);
-        }
-        points.clear();
-        complex.mesh_edge_points(mesh_edge, from, to, &points);
-        for (const VertexId v : points) {
-          ids.push_back(builder.vertex(v, copy));
-          strict.push_back(0);
-        }
-      }
-      triangles.clear();
-      triangulate_convex_polygon(std::move(strict), false, &triangles);
-      for (const auto& t : triangles) builder.add_triangle(ids[t[0]], ids[t[1]], ids[t[2]], face_source(face), copy);
+  polygons = {};
+
+  // 3. Positions and embedding weights, in parallel.
+  const Index n = static_cast<Index>(vertices.size());
+  result.surface.vertices.resize(n, 3);
+  result.vertex_weights.resize(n, 4);
+  result.vertex_tet.resize(static_cast<std::size_t>(n));
+  tbb::parallel_for(tbb::blocked_range<Index>(0, n, 1024), [&](const auto& range) {
+    for (Index v = range.begin(); v != range.end(); ++v) {
+      const NewVertex& vertex = vertices[v];
+      const Vec3 p = vertex.point < mesh.num_nodes()
+                         ? Vec3(mesh.rest().row(static_cast<Index>(vertex.point)).transpose())
+                         : reg.position(static_cast<VertexId>(vertex.point - mesh.num_nodes()));
+      result.surface.vertices.row(v) = p.transpose();
+      result.vertex_weights.row(v) = barycentric(mesh, copies.copy_tet[vertex.copy], p, vertex.zero_mask).transpose();
+      result.vertex_tet[v] = vertex.copy;
     }
+  });
+  result.surface.triangles.resize(static_cast<Index>(triangles.size()), 3);
+  for (std::size_t i = 0; i < triangles.size(); ++i) {
+    for (int k = 0; k < 3; ++k) result.surface.triangles(static_cast<Index>(i), k) = triangles[i][k];
   }
-  return builder.finish();
+  return result;
 }
 
 }  // namespace tetcut::surface

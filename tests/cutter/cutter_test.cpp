@@ -9,6 +9,8 @@
 #include <tetcut/generators.hpp>
 #include <tetcut/quality.hpp>
 
+#include <tbb/global_control.h>
+
 #include <algorithm>
 #include <cmath>
 #include <numeric>
@@ -191,6 +193,25 @@ TEST(Cutter, TCutGivesThreePieces) {
   // The same with the stem first, and in two batches (a cut of a cut).
   expect_pieces(cut(cube320(), {stem + plane(0, 0.5)}), {0.5, 0.375, 0.125});
   expect_pieces(cut(cube320(), {plane(0, 0.5), stem}), {0.5, 0.375, 0.125});
+}
+
+// Building the result runs in parallel; it must not depend on how the work is scheduled.
+TEST(Cutter, ResultIsTheSameOnOneThreadAndOnAll) {
+  const TetMesh mesh = make_bcc(Box{}, 0.2);
+  Cutter cutter(mesh);
+  cutter.cut(figures::icosphere(Vec3(0.45, 0.5, 0.55), 0.3, 2));
+  CutResult serial;
+  {
+    const tbb::global_control one_thread(tbb::global_control::max_allowed_parallelism, 1);
+    serial = cutter.result();
+  }
+  const CutResult parallel = cutter.result();
+  EXPECT_EQ(serial.mesh.mesh.tets(), parallel.mesh.mesh.tets());
+  EXPECT_EQ(serial.mesh.tet_piece, parallel.mesh.tet_piece);
+  EXPECT_EQ(serial.mesh.tet_material_volume, parallel.mesh.tet_material_volume);
+  EXPECT_EQ(serial.surface.surface.triangles, parallel.surface.surface.triangles);
+  EXPECT_EQ(serial.surface.surface.vertices, parallel.surface.surface.vertices);
+  EXPECT_EQ(serial.surface.vertex_weights, parallel.surface.vertex_weights);
 }
 
 // The paper's Figure 4: 16 + 16 planes slice the 320-tet cube into 17 x 17 sticks.
