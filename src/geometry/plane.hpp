@@ -3,17 +3,17 @@
 // such planes (TPI points). Topology is decided by these predicates only; no coordinate of an
 // implicit point is ever rounded while deciding.
 //
-// A plane is {x : n . x + d = 0}. Two definitions exist:
+// A plane is {x : n . x + d = 0}. Three definitions exist:
 //   - through three input points p, q, r: n = (q - p) x (r - p), d = -n . p (degree 2 and 3);
 //   - a wall through input points p, q and the coordinate axis e_k: n = (q - p) x e_k,
-//     d = -n . p (degree 1 and 2). Walls bound a cut triangle's prism: a point of the triangle's
-//     plane is inside the triangle iff it is inside its three walls.
+//     d = -n . p (degree 1 and 2). Within a cut triangle's plane, its walls are the lines of its
+//     edges (the paper's virtual triangles);
+//   - a world plane pulled back into the rest space of a tet whose corners moved (degree 5 and 6):
+//     {X : world(phi(X)) = 0} for the affine map phi from the rest corners to the current corners.
 //
-// side(TPI(A, B, C), Q) = sign(det4[A; B; C; Q]) * sign(det3[nA; nB; nC]), where det4 is over the
-// rows (n, d). Each sign is computed with a filtered evaluation (geometry/approx.hpp) and, when that
-// cannot decide, exactly: all input doubles of the involved planes are scaled by one power of two
-// to integers, and the determinants are evaluated in GMP integers. Scaling all coordinates by s > 0
-// multiplies each determinant by a positive power of s, so the signs are unchanged.
+// Every predicate is a filtered evaluation (geometry/approx.hpp) and, when that cannot decide, an
+// exact one on each plane's exact form: integers proportional to (n, d) by a positive factor of
+// the plane's own. Signs of the determinants below do not change under such factors.
 
 #include <tetcut/types.hpp>
 
@@ -21,14 +21,18 @@
 
 #include <array>
 #include <cstdint>
+#include <memory>
 
 #include "geometry/approx.hpp"
 
 namespace tetcut::geometry {
 
+/// The plane's (n, d) times a positive factor, as integers.
+using ExactPlane = std::array<mpz_class, 4>;
+
 class Plane {
  public:
-  enum class Kind : std::uint8_t { kThroughPoints, kWall };
+  enum class Kind : std::uint8_t { kThroughPoints, kWall, kPulledBack };
 
   Plane() = default;
   /// The plane through p, q, r, with normal (q - p) x (r - p). The points must not be collinear.
@@ -36,19 +40,35 @@ class Plane {
   /// The plane through p and q containing the direction of coordinate axis `axis`, with normal
   /// (q - p) x e_axis. q - p must not be parallel to that axis.
   static Plane wall(const Vec3& p, const Vec3& q, int axis);
+  /// `world` pulled back into the rest space of a tet: {X : world(phi(X)) = 0}, phi the affine
+  /// map taking rest[k] to current[k]; rest must be positively oriented. The function is
+  /// Q(X) = -sum_k world(current[k]) F_k(X), with F_k the outward plane of the rest face opposite
+  /// corner k: the interpolation of world's values at the current corners, times six times the
+  /// rest volume. So Q(X) has the sign of world(phi(X)), and on a face of the tet it depends only
+  /// on that face's corners: tets sharing a face and its current corners agree on it exactly.
+  /// Zero coefficients (a current tet flat within `world`) must be rejected by the caller.
+  static Plane pulled_back(const Plane& world, const std::array<Vec3, 4>& rest, const std::array<Vec3, 4>& current);
   /// The same plane with the opposite normal.
   Plane flipped() const;
 
   Kind kind() const { return kind_; }
   int axis() const { return axis_; }
+  /// Defining points: three for kThroughPoints, the first two for kWall, none for kPulledBack.
   const std::array<Vec3, 3>& points() const { return points_; }
+  int num_defining_points() const { return kind_ == Kind::kThroughPoints ? 3 : kind_ == Kind::kWall ? 2 : 0; }
   /// Coefficients (nx, ny, nz, d) with error bounds.
   const std::array<Approx, 4>& approx() const { return approx_; }
+  /// Whether the filtered coefficients are certainly all zero (a degenerate pull-back).
+  bool certainly_zero() const;
 
   /// Rounded coefficients, for output geometry only.
   Eigen::Vector4d rounded() const;
 
+  /// The exact form, computed afresh (callers cache it).
+  ExactPlane exact() const;
+
  private:
+  struct PullBack;
   void compute_approx();
 
   Kind kind_ = Kind::kThroughPoints;
@@ -56,8 +76,7 @@ class Plane {
   bool flipped_ = false;
   std::array<Vec3, 3> points_{};
   std::array<Approx, 4> approx_{};
-
-  friend struct ExactPlanes;
+  std::shared_ptr<const PullBack> pull_back_;
 };
 
 /// Sign of n . x + d for an input point x. Exact.
@@ -123,9 +142,8 @@ int side_of_segment_meet(const Vec3& a, const Vec3& b, const Plane& p, const Pla
 // a point's homogeneous coordinates, are multiplied by a positive number, so each plane and each
 // point is scaled to integers on its own.
 
-/// The plane's (n, d) times a positive power of two, as integers.
-using ExactPlane = std::array<mpz_class, 4>;
-ExactPlane exact_plane(const Plane& plane);
+/// Same as plane.exact().
+inline ExactPlane exact_plane(const Plane& plane) { return plane.exact(); }
 
 /// Homogeneous coordinates (X, Y, Z, W) with W > 0, as integers: the point is (X, Y, Z) / W.
 using ExactPoint = std::array<mpz_class, 4>;

@@ -232,5 +232,98 @@ TEST_F(PlaneTest, ExactFormsAreScaledCopies) {
   }
 }
 
+// Pulled-back planes: Q(X) has the sign of world(phi(X)) for the affine map phi from the rest
+// corners to the current ones, computed here independently in rationals.
+struct Deformed {
+  std::array<Vec3, 4> rest, current;
+};
+
+// The world point phi(X) for rest point X, exactly.
+Q3 deform(const Deformed& t, const Q3& x) {
+  // Barycentric coordinates of X: solve [r1 - r0, r2 - r0, r3 - r0] w = X - r0 by Cramer's rule.
+  Q3 e[3], rhs;
+  for (int k = 0; k < 3; ++k) rhs[k] = x[k] - t.rest[0][k];
+  for (int c = 0; c < 3; ++c) {
+    for (int k = 0; k < 3; ++k) e[c][k] = mpq_class(t.rest[c + 1][k]) - t.rest[0][k];
+  }
+  // Columns e[c]: det of the matrix with rows k = (e0[k], e1[k], e2[k]).
+  const auto det_columns = [](const Q3& a, const Q3& b, const Q3& c) -> mpq_class {
+    return a[0] * (b[1] * c[2] - b[2] * c[1]) - b[0] * (a[1] * c[2] - a[2] * c[1]) + c[0] * (a[1] * b[2] - a[2] * b[1]);
+  };
+  const mpq_class det = det_columns(e[0], e[1], e[2]);
+  const mpq_class w1 = det_columns(rhs, e[1], e[2]) / det, w2 = det_columns(e[0], rhs, e[2]) / det,
+                  w3 = det_columns(e[0], e[1], rhs) / det;
+  const mpq_class w0 = 1 - w1 - w2 - w3;
+  Q3 y;
+  for (int k = 0; k < 3; ++k) {
+    y[k] = w0 * t.current[0][k] + w1 * t.current[1][k] + w2 * t.current[2][k] + w3 * t.current[3][k];
+  }
+  return y;
+}
+
+int world_side(const Plane& world, const Q3& y) {
+  const auto c = reference_plane(world);
+  return sgn(c[0] * y[0] + c[1] * y[1] + c[2] * y[2] + c[3]);
+}
+
+Deformed random_deformed(std::mt19937_64& generator) {
+  std::uniform_real_distribution<double> unit(-1, 1);
+  Deformed t;
+  do {
+    for (Vec3& p : t.rest) p = Vec3(unit(generator), unit(generator), unit(generator));
+  } while (orient3d(t.rest[0], t.rest[1], t.rest[2], t.rest[3]) <= 0);
+  for (int k = 0; k < 4; ++k) t.current[k] = t.rest[k] + 0.5 * Vec3(unit(generator), unit(generator), unit(generator));
+  return t;
+}
+
+TEST_F(PlaneTest, PulledBackPlaneHasTheSignOfTheWorldPlaneAtTheDeformedPoint) {
+  std::mt19937_64 generator(21);
+  std::uniform_real_distribution<double> unit(-1, 1);
+  const auto point = [&]() -> Vec3 { return Vec3(unit(generator), unit(generator), unit(generator)); };
+  for (int trial = 0; trial < 200; ++trial) {
+    const Deformed t = random_deformed(generator);
+    const Plane world = trial % 3 == 0 ? Plane::wall(point(), point(), trial % 3) : Plane::through(point(), point(), point());
+    const Plane pulled = Plane::pulled_back(world, t.rest, t.current);
+    for (int sample = 0; sample < 10; ++sample) {
+      const Vec3 x = point();
+      ASSERT_EQ(side_of_point(pulled, x), world_side(world, deform(t, {mpq_class(x[0]), mpq_class(x[1]), mpq_class(x[2])})));
+    }
+    // The rest corners map to the current corners: the pulled-back plane's sign there is the
+    // world plane's sign at the current corner, exactly, even when that is zero.
+    for (int k = 0; k < 4; ++k) ASSERT_EQ(side_of_point(pulled, t.rest[k]), side_of_point(world, t.current[k]));
+    // A world plane through two current corners pulls back to a plane through the rest corners.
+    const Plane through_corners = Plane::through(t.current[0], t.current[1], point());
+    const Plane back = Plane::pulled_back(through_corners, t.rest, t.current);
+    ASSERT_EQ(side_of_point(back, t.rest[0]), 0);
+    ASSERT_EQ(side_of_point(back, t.rest[1]), 0);
+  }
+}
+
+TEST_F(PlaneTest, TetsSharingAFaceAgreeOnItExactly) {
+  std::mt19937_64 generator(22);
+  std::uniform_real_distribution<double> unit(-1, 1);
+  const auto point = [&]() -> Vec3 { return Vec3(unit(generator), unit(generator), unit(generator)); };
+  for (int trial = 0; trial < 200; ++trial) {
+    // Tets A = (r0, r1, r2, r3) and B = (r0, r2, r1, s) share face (r0, r1, r2) and its current
+    // corners; their fourth corners and their motions differ.
+    Deformed a = random_deformed(generator);
+    Deformed b;
+    b.rest = {a.rest[0], a.rest[2], a.rest[1], Vec3::Zero()};
+    b.current = {a.current[0], a.current[2], a.current[1], Vec3::Zero()};
+    do {
+      b.rest[3] = point();
+    } while (orient3d(b.rest[0], b.rest[1], b.rest[2], b.rest[3]) <= 0);
+    b.current[3] = b.rest[3] + 0.5 * point();
+    const Plane world = Plane::through(point(), point(), point());
+    const Plane qa = Plane::pulled_back(world, a.rest, a.current), qb = Plane::pulled_back(world, b.rest, b.current);
+    // Where qa meets the shared face, along any third plane, qb passes too.
+    const Plane face = Plane::through(a.rest[0], a.rest[1], a.rest[2]);
+    const Plane across = Plane::through(point(), point(), point());
+    if (normal_determinant_sign(face, qa, across) == 0) continue;
+    const Homogeneous h = tpi_homogeneous(face, qa, across);
+    ASSERT_EQ(side_of_tpi(face, qa, across, h, normal_determinant_sign(face, qa, across), qb), 0) << trial;
+  }
+}
+
 }  // namespace
 }  // namespace tetcut::geometry
