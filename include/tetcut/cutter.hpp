@@ -3,6 +3,7 @@
 //
 //   tetcut::Cutter cutter(mesh);
 //   cutter.cut(soup);                      // any number of batches, in rest space
+//   cutter.cut_deformed(blade, positions); // or in world space, on the deformed cut mesh
 //   const tetcut::CutResult r = cutter.result();
 //   r.mesh.mesh          // the simulation mesh: one copy of a tet per material component
 //   r.surface.surface    // the material surface, embedded in the copies
@@ -15,6 +16,7 @@
 #include <tetcut/surface.hpp>
 #include <tetcut/tet_mesh.hpp>
 
+#include <array>
 #include <cstdint>
 #include <memory>
 #include <vector>
@@ -65,20 +67,34 @@ struct CutResult {
   double seconds_surface = 0;
 };
 
-/// What one batch did.
+/// What one batch did, and what a simulator needs to carry its state over.
 struct CutBatchReport {
   Index triangles = 0;                     ///< triangles in the batch
   std::vector<Index> degenerate;           ///< zero-area triangles (collinear corners), skipped
   Index tets_touched = 0;                  ///< input tets whose material changed
   std::vector<Index> touched;              ///< those tets, in increasing order
+  /// World-space cuts: tet copies that the batch would have cut but whose current corners are
+  /// inverted or flat, so the cut was not applied there (their material is not cut by this batch).
+  std::vector<Index> skipped_inverted;
+
+  /// Nodes from first_new_node on are new; node first_new_node + i was split from node
+  /// new_node_source[i] (an id from before the batch): give it that node's position and velocity.
+  Index first_new_node = 0;
+  std::vector<Index> new_node_source;
+  /// Tet copies from first_new_tet on are new, split from copy new_tet_source[i] (same input tet).
+  Index first_new_tet = 0;
+  std::vector<Index> new_tet_source;
+  /// Copies that existed before the batch and whose nodes changed, ascending. All other ids
+  /// (nodes and copies) keep their meaning.
+  std::vector<Index> changed_tets;
 };
 
-/// The cut state of one mesh: the intersection registry and the cell complex. Batches of
-/// triangles accumulate; each changes only the tets it touches.
+/// The cut state of one mesh: the intersection registry, the cell complex, and the tet copies
+/// and nodes of the cut mesh. Batches of triangles accumulate; each changes only the tets it
+/// touches, and node and tet ids, once given, stay.
 class Cutter {
  public:
-  /// Takes the mesh to cut (its rest positions). Nothing is precomputed per tet beyond a
-  /// bounding-box hierarchy: O(T log T).
+  /// Takes the mesh to cut. Each tet starts as its own copy over the input nodes. O(T log T).
   explicit Cutter(TetMesh mesh);
   ~Cutter();
   Cutter(Cutter&&) noexcept;
@@ -89,7 +105,26 @@ class Cutter {
   /// tets the batch touches and their cells, plus O(log T) per triangle.
   CutBatchReport cut(const TriangleSurface& batch);
 
-  /// The simulation mesh and material surface for all batches so far. O(T + refined cells).
+  /// Cuts by a batch of triangles given in world space, on the cut mesh deformed to `nodes`
+  /// (num_nodes() x 3 current positions). Each tet copy that a triangle touches in its current
+  /// shape takes its own copy of the triangle, pulled back through its motion into rest space, and
+  /// only that copy's material is cut; copies sharing a face and its nodes agree on it exactly.
+  /// Copies inverted or flat in `nodes` are skipped and reported. Throws Error(kInvalidInput) when
+  /// `nodes` has the wrong size or a non-finite entry. Cost: as cut(), plus O(copies) to bound
+  /// the copies in their current positions.
+  CutBatchReport cut_deformed(const TriangleSurface& batch, const Points& nodes);
+
+  /// The cut mesh as it stands: node and tet counts, each copy's nodes (in its input tet's order),
+  /// and where each node and copy came from. O(1).
+  Index num_nodes() const;
+  Index num_tets() const;
+  const std::vector<std::array<Index, 4>>& tet_nodes() const;
+  const std::vector<Index>& node_parent() const;
+  const std::vector<Index>& tet_parent() const;
+
+  /// The simulation mesh, pieces and material surface for all batches so far. Current positions
+  /// are those given to the last cut_deformed (new nodes at their sources), or the input's.
+  /// O(T + refined cells).
   CutResult result() const;
 
   const TetMesh& input() const;

@@ -33,6 +33,7 @@ CellComplex::CellComplex(const TetMesh& mesh, registry::IntersectionRegistry& re
       face_plane_(static_cast<std::size_t>(mesh.adjacency().num_faces()), -1),
       mesh_edge_first_(static_cast<std::size_t>(mesh.adjacency().num_edges()), -1),
       node_vertex_(static_cast<std::size_t>(mesh.num_nodes()), -1),
+      tet_label_(static_cast<std::size_t>(mesh.num_tets()), -1),
       tet_touch_stamp_(static_cast<std::size_t>(mesh.num_tets()), -1) {}
 
 Index CellComplex::tet_of(Side s) const {
@@ -188,6 +189,7 @@ CellId CellComplex::refine(Index tet) {
   Cell c;
   c.tet = tet;
   c.material = tet_material_[tet] != 0;
+  c.label = tet_label_[tet];
   cells_.push_back(std::move(c));
   first_cell_[tet] = cell;
   const Side marker = unrefined_side(tet);
@@ -259,21 +261,20 @@ int CellComplex::classify_facet(FacetId facet, PlaneId plane) const {
 bool CellComplex::section_overlaps_triangle(CellId cell) const {
   // The section S of the cell by the triangle's plane and the triangle T are convex polygons in
   // that plane; their interiors meet unless a line through an edge of one separates them.
-  const CutTriangle& t = *insertion_.triangle;
   // Edges of S lie on the cell's facet planes: T wholly outside one of them (touching allowed).
   for (const FacetId f : cells_[cell].facets) {
     const PlaneId plane = facets_[f].plane;
     const int outward = facets_[f].back == cell ? 1 : -1;
-    if (registry_->side_of_input(plane, t.a) * outward >= 0 && registry_->side_of_input(plane, t.b) * outward >= 0 &&
-        registry_->side_of_input(plane, t.c) * outward >= 0) {
+    if (corner_side(0, plane) * outward >= 0 && corner_side(1, plane) * outward >= 0 &&
+        corner_side(2, plane) * outward >= 0) {
       return false;
     }
   }
   // Edges of T lie on the walls: S wholly outside one of them. The corners of S are the cell's
   // vertices on the plane and the points where its edges cross it (not registered: most cells
   // tested here are not split).
-  const PlaneId plane = insertion_.plane.id;
-  for (const OrientedPlane& wall : insertion_.walls) {
+  const PlaneId plane = insertion_.triangle->plane.id;
+  for (const OrientedPlane& wall : insertion_.triangle->walls) {
     bool outside = true;
     for (const FacetId f : cells_[cell].facets) {
       const auto& corners = facets_[f].corners;
@@ -295,12 +296,15 @@ bool CellComplex::section_overlaps_triangle(CellId cell) const {
   return true;
 }
 
-bool CellComplex::tet_may_be_cut(Index tet) const {
-  // The same tests as process_cell, on the four corners of a tet that has no cells yet.
-  const Points& p = mesh_->rest();
-  Vec3 x[4];
-  for (int k = 0; k < 4; ++k) x[k] = p.row(mesh_->tets()(tet, k)).transpose();
-  const geometry::Plane& plane = registry_->plane(insertion_.plane.id);
+int CellComplex::corner_side(int k, PlaneId plane) const {
+  const PreparedTriangle& t = *insertion_.triangle;
+  if (t.corners_are_inputs) return registry_->side_of_input(plane, t.corners[k]);
+  return registry_->side_of_meet(t.plane.id, t.walls[k].id, t.walls[(k + 2) % 3].id, plane);
+}
+
+bool tet_may_meet_triangle(const std::array<Vec3, 4>& x, const geometry::Plane& plane,
+                           const std::array<std::pair<const geometry::Plane*, int>, 3>& walls,
+                           const std::function<int(int, const geometry::Plane&)>& corner_side) {
   int side[4], positive = 0, negative = 0;
   for (int k = 0; k < 4; ++k) {
     side[k] = geometry::side_of_point(plane, x[k]);
@@ -308,27 +312,40 @@ bool CellComplex::tet_may_be_cut(Index tet) const {
     negative += side[k] < 0;
   }
   if (positive == 0 || negative == 0) return positive + negative == 1;  // only a face on the plane matters
-  const CutTriangle& t = *insertion_.triangle;
+  // The section and the triangle, two convex polygons in the plane: separated by a face of the tet
+  // (the triangle's corners all outside it), or by a wall (the section's corners all outside it).
   for (int f = 0; f < 4; ++f) {
     const auto& local = kTetFaces[f];
     const geometry::Plane face = geometry::Plane::through(x[local[0]], x[local[1]], x[local[2]]);  // outward
-    if (geometry::side_of_point(face, t.a) >= 0 && geometry::side_of_point(face, t.b) >= 0 &&
-        geometry::side_of_point(face, t.c) >= 0) {
-      return false;
-    }
+    if (corner_side(0, face) >= 0 && corner_side(1, face) >= 0 && corner_side(2, face) >= 0) return false;
   }
-  for (const OrientedPlane& wall : insertion_.walls) {
-    const geometry::Plane& w = registry_->plane(wall.id);
+  for (const auto& [wall, sign] : walls) {
     bool outside = true;
     for (int k = 0; k < 4 && outside; ++k) {
-      if (side[k] == 0) outside = geometry::side_of_point(w, x[k]) * wall.sign <= 0;
+      if (side[k] == 0) outside = geometry::side_of_point(*wall, x[k]) * sign <= 0;
       for (int j = k + 1; j < 4 && outside; ++j) {
-        if (side[k] * side[j] < 0) outside = geometry::side_of_segment_meet(x[k], x[j], plane, w) * wall.sign <= 0;
+        if (side[k] * side[j] < 0) outside = geometry::side_of_segment_meet(x[k], x[j], plane, *wall) * sign <= 0;
       }
     }
     if (outside) return false;
   }
   return true;
+}
+
+bool CellComplex::tet_may_be_cut(Index tet) const {
+  const PreparedTriangle& t = *insertion_.triangle;
+  std::array<Vec3, 4> x;
+  for (int k = 0; k < 4; ++k) x[k] = mesh_->rest().row(mesh_->tets()(tet, k)).transpose();
+  const geometry::Plane& plane = registry_->plane(t.plane.id);
+  std::array<std::pair<const geometry::Plane*, int>, 3> walls;
+  for (int e = 0; e < 3; ++e) walls[e] = {&registry_->plane(t.walls[e].id), t.walls[e].sign};
+  return tet_may_meet_triangle(x, plane, walls, [&](int k, const geometry::Plane& face) {
+    if (t.corners_are_inputs) return geometry::side_of_point(face, t.corners[k]);
+    const geometry::Plane& b = registry_->plane(t.walls[k].id);
+    const geometry::Plane& c = registry_->plane(t.walls[(k + 2) % 3].id);
+    return geometry::side_of_tpi(plane, b, c, geometry::tpi_homogeneous(plane, b, c),
+                                 geometry::normal_determinant_sign(plane, b, c), face);
+  });
 }
 
 // ---- Splitting ---------------------------------------------------------------------------------
@@ -446,6 +463,7 @@ CellId CellComplex::split(CellId cell, PlaneId plane, FacetId* section) {
     Cell part;
     part.tet = cells_[cell].tet;
     part.material = cells_[cell].material;
+    part.label = cells_[cell].label;
     part.next_in_tet = cells_[cell].next_in_tet;
     cells_.push_back(std::move(part));
     cells_[cell].next_in_tet = negative_cell;
@@ -540,8 +558,8 @@ void CellComplex::cover(FacetId f) {
   Facet& facet = facets_[f];
   if (facet.stamp == insertion_.stamp) return;
   facet.stamp = insertion_.stamp;
-  if (facet.cut < 0) facet.cut = insertion_.cut_id;
-  const OrientedPlane& plane = insertion_.plane;
+  if (facet.covering < 0) facet.covering = insertion_.stamp;
+  const OrientedPlane& plane = insertion_.triangle->plane;
   const int alignment = facet.plane == plane.id
                             ? 1
                             : geometry::plane_alignment(registry_->plane(facet.plane), registry_->plane(plane.id));
@@ -556,7 +574,7 @@ bool CellComplex::cover_inside(FacetId f) {
   if (facets_[f].stamp == insertion_.stamp) return false;
   bool changed = false;
   FacetId inside = f;
-  for (const OrientedPlane& wall : insertion_.walls) {
+  for (const OrientedPlane& wall : insertion_.triangle->walls) {
     const int position = classify_facet(inside, wall.id) * wall.sign;
     if (position == -1) return changed;  // outside the triangle, or touching its edge
     if (position != 0) continue;
@@ -569,7 +587,7 @@ bool CellComplex::cover_inside(FacetId f) {
 }
 
 bool CellComplex::process_cell(CellId cell) {
-  const PlaneId plane = insertion_.plane.id;
+  const PlaneId plane = insertion_.triangle->plane.id;
   if (classify(cell, plane) == 0) {
     // The plane crosses the cell: split it there when the triangle covers part of the section.
     if (!section_overlaps_triangle(cell)) return false;
@@ -589,16 +607,15 @@ bool CellComplex::process_cell(CellId cell) {
   return changed;
 }
 
-void CellComplex::insert_triangle(const CutTriangle& triangle, std::span<const Index> tets, std::vector<Index>* touched) {
-  insertion_ = Insertion{};
-  insertion_.stamp = next_stamp_++;
-  insertion_.cut_id = triangle.id;
-  insertion_.triangle = &triangle;
-  insertion_.touched = touched;
-  insertion_.plane = registry_->triangle_plane(triangle.a, triangle.b, triangle.c);
+PreparedTriangle CellComplex::prepare(const CutTriangle& triangle) {
+  PreparedTriangle t;
+  t.cut_id = triangle.id;
+  t.corners_are_inputs = true;
+  t.corners = {triangle.a, triangle.b, triangle.c};
+  t.plane = registry_->triangle_plane(triangle.a, triangle.b, triangle.c);
   // Walls along the axis on which the normal is largest (chosen on rounded values; any axis with a
   // non-zero component works, and that is checked exactly).
-  const Plane& cut_plane = registry_->plane(insertion_.plane.id);
+  const Plane& cut_plane = registry_->plane(t.plane.id);
   int axis = 0;
   for (int k = 1; k < 3; ++k) {
     if (std::abs(cut_plane.approx()[k].value) > std::abs(cut_plane.approx()[axis].value)) axis = k;
@@ -608,25 +625,31 @@ void CellComplex::insert_triangle(const CutTriangle& triangle, std::span<const I
       if (geometry::normal_component_sign(cut_plane, k) != 0) axis = k;
     }
   }
-  const Vec3* corner[3] = {&triangle.a, &triangle.b, &triangle.c};
   for (int e = 0; e < 3; ++e) {
-    insertion_.walls[e] = registry_->wall(*corner[e], *corner[(e + 1) % 3], axis, *corner[(e + 2) % 3]);
+    t.walls[e] = registry_->wall(t.corners[e], t.corners[(e + 1) % 3], axis, t.corners[(e + 2) % 3]);
   }
-  if (triangle.id >= 0) {
-    if (inserted_.size() <= static_cast<std::size_t>(triangle.id)) inserted_.resize(static_cast<std::size_t>(triangle.id) + 1);
-    inserted_[triangle.id] = {insertion_.plane, insertion_.walls};
-  }
-  registry_->begin_memo({insertion_.plane.id, insertion_.walls[0].id, insertion_.walls[1].id, insertion_.walls[2].id});
+  return t;
+}
+
+void CellComplex::insert_triangle(const PreparedTriangle& triangle, std::span<const Index> tets, std::int32_t label,
+                                  std::vector<Index>* touched) {
+  insertion_ = Insertion{};
+  insertion_.stamp = static_cast<std::int32_t>(inserted_.size());
+  insertion_.triangle = &triangle;
+  insertion_.touched = touched;
+  inserted_.push_back({triangle.plane, triangle.walls, triangle.cut_id});
+  registry_->begin_memo({triangle.plane.id, triangle.walls[0].id, triangle.walls[1].id, triangle.walls[2].id});
   std::vector<CellId> cells;
   for (const Index tet : tets) {
     if (!refined(tet)) {
-      if (!tet_material(tet) || !tet_may_be_cut(tet)) continue;
+      if (!tet_material(tet) || (label >= 0 && tet_label_[tet] != label) || !tet_may_be_cut(tet)) continue;
       refine(tet);
+      touch(tet);  // its cells are new, even if the triangle then leaves them whole
     }
     cells.clear();
     for (CellId c = first_cell_[tet]; c >= 0; c = cells_[c].next_in_tet) cells.push_back(c);
     for (const CellId c : cells) {
-      if (cells_[c].material) process_cell(c);
+      if (cells_[c].material && (label < 0 || cells_[c].label == label)) process_cell(c);
     }
   }
   registry_->end_memo();
@@ -708,8 +731,8 @@ std::string CellComplex::validate() const {
       }
     }
     if (facet.covered()) {
-      if (facet.cut >= static_cast<std::int32_t>(inserted_.size())) return fail("covered by an unknown triangle: facet", f);
-      const InsertedTriangle& t = inserted_[facet.cut];
+      if (facet.covering >= static_cast<std::int32_t>(inserted_.size())) return fail("covered by an unknown triangle: facet", f);
+      const InsertedTriangle& t = inserted_[facet.covering];
       for (const Corner& corner : corners) {
         if (registry_->side(corner.vertex, t.plane.id) != 0) return fail("covered but off its triangle's plane: facet", f);
         for (const OrientedPlane& wall : t.walls) {

@@ -27,6 +27,7 @@
 
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <span>
 #include <string>
 #include <vector>
@@ -74,21 +75,25 @@ struct Facet {
   std::vector<Corner> corners;
   Index mesh_face = -1;  ///< the mesh face it lies on, or -1
   FacetId next_on_mesh_face = -1;
-  /// The first cut triangle covering this facet, or -1 when uncovered (material passes through).
-  std::int32_t cut = -1;
+  /// The first insertion covering this facet (see CellComplex::cut_id), or -1 when uncovered
+  /// (material passes through).
+  std::int32_t covering = -1;
   /// Sum over the cut triangles covering it of +1 (triangle normal along the plane's) or -1: the
   /// jump of the winding number of the cut surface when crossing from back to front.
   std::int32_t winding = 0;
   /// Last insertion that covered it, so that the two cells sharing it count a triangle once.
   std::int32_t stamp = -1;
 
-  bool covered() const { return cut >= 0; }
+  bool covered() const { return covering >= 0; }
 };
 
 struct Cell {
   Index tet = -1;
   CellId next_in_tet = -1;
   bool material = true;
+  /// The caller's label, kept by both parts when the cell is split: the cutter stores the tet copy
+  /// whose material the cell is, so that a cut placed on a deformed copy goes into its cells only.
+  std::int32_t label = -1;
   std::vector<FacetId> facets;
 };
 
@@ -98,17 +103,59 @@ struct CutTriangle {
   std::int32_t id = -1;
 };
 
+/// A cut triangle ready to insert into the cells of some tets: its plane, oriented along the
+/// triangle's normal, and its three walls (walls[e] through corners e and e + 1), oriented so the
+/// triangle is on their positive side, all in the rest space of those tets. In a cut placed on a
+/// deformed mesh they are world planes pulled back through one tet copy's motion.
+struct PreparedTriangle {
+  registry::OrientedPlane plane;
+  std::array<registry::OrientedPlane, 3> walls;
+  std::int32_t cut_id = -1;
+  /// The corners, when they are input points (rest-space cuts), for cheaper tests; otherwise
+  /// corner k is where the plane meets walls k and k + 2.
+  bool corners_are_inputs = false;
+  std::array<Vec3, 3> corners{};
+};
+
+/// Whether a triangle may cover part of the closed tet with corners x (positively oriented): the
+/// tests that spare a tet without cells, exact. `plane` is the triangle's plane; `walls` its
+/// walls with the sign of their inner side; corner_side(k, q) the side of plane q at corner k.
+/// False only when the triangle certainly covers no area of the tet.
+bool tet_may_meet_triangle(const std::array<Vec3, 4>& x, const geometry::Plane& plane,
+                           const std::array<std::pair<const geometry::Plane*, int>, 3>& walls,
+                           const std::function<int(int, const geometry::Plane&)>& corner_side);
+
 class CellComplex {
  public:
   /// No tet is refined yet. `mesh` and `registry` must outlive the complex; the registry must be
   /// built on mesh.rest().
   CellComplex(const TetMesh& mesh, registry::IntersectionRegistry& registry);
 
-  /// Inserts a cut triangle whose corners are not collinear. `tets` must contain every tet whose
-  /// closure meets the triangle (more tets only cost time). Appends to `touched` each tet whose
-  /// cells, or whose facets' covering, changed, once per call. Cost: O(sum over touched cells of
-  /// their size), independent of the mesh size.
-  void insert_triangle(const CutTriangle& triangle, std::span<const Index> tets, std::vector<Index>* touched);
+  /// Registers the plane and walls of a rest-space triangle whose corners are not collinear (walls
+  /// along the axis on which its normal is largest).
+  PreparedTriangle prepare(const CutTriangle& triangle);
+
+  /// Inserts a prepared triangle into the cells of `tets` labelled `label` (any cell when -1).
+  /// `tets` must contain every tet whose closure meets the triangle (more only cost time). Appends
+  /// to `touched` each tet whose cells, or whose facets' covering, changed, once per call. Cost:
+  /// O(sum over touched cells of their size), independent of the mesh size.
+  void insert_triangle(const PreparedTriangle& triangle, std::span<const Index> tets, std::int32_t label,
+                       std::vector<Index>* touched);
+  /// Rest space, into every cell.
+  void insert_triangle(const CutTriangle& triangle, std::span<const Index> tets, std::vector<Index>* touched) {
+    insert_triangle(prepare(triangle), tets, -1, touched);
+  }
+
+  /// The caller's id of the cut triangle that first covered a facet, or -1.
+  std::int32_t cut_id(const Facet& facet) const {
+    return facet.covering < 0 ? -1 : inserted_[facet.covering].cut_id;
+  }
+
+  /// Labels: a refined tet's cells carry their own; an unrefined tet has one, which its first cell
+  /// takes when it is refined.
+  void set_cell_label(CellId cell, std::int32_t label) { cells_[cell].label = label; }
+  void set_tet_label(Index tet, std::int32_t label) { tet_label_[tet] = label; }
+  std::int32_t tet_label(Index tet) const { return tet_label_[tet]; }
 
   /// Marks an unrefined tet as holding no material (embedding); cells of refined tets are marked
   /// through set_cell_material.
@@ -171,6 +218,8 @@ class CellComplex {
   /// Whether an unrefined tet's closed volume can be changed by the triangle (same tests as
   /// process_cell, on the four corners).
   bool tet_may_be_cut(Index tet) const;
+  /// Side of `plane` at corner k of the triangle being inserted.
+  int corner_side(int k, PlaneId plane) const;
   /// Splits and covers inside one cell; returns whether anything changed.
   bool process_cell(CellId cell);
 
@@ -220,22 +269,21 @@ class CellComplex {
   std::vector<PlaneId> face_plane_;        // per mesh face, -1 until needed
   std::vector<EdgeId> mesh_edge_first_;    // per mesh edge
   std::vector<VertexId> node_vertex_;      // per mesh node, -1 until needed
+  std::vector<std::int32_t> tet_label_;    // per tet, for unrefined tets
 
-  // The insertion in progress.
+  // The insertion in progress; its stamp is its index in inserted_.
   struct Insertion {
     std::int32_t stamp = -1;
-    std::int32_t cut_id = -1;
-    registry::OrientedPlane plane;
-    std::array<registry::OrientedPlane, 3> walls;
-    const CutTriangle* triangle = nullptr;
+    const PreparedTriangle* triangle = nullptr;
     std::vector<Index>* touched = nullptr;
   };
   Insertion insertion_;
-  std::int32_t next_stamp_ = 0;
-  // Plane and inward walls of each inserted triangle, by cut id (for validate()).
+  // Every insertion's plane, walls and cut id: facets name the insertion that covered them, and
+  // validate() checks they lie inside its triangle.
   struct InsertedTriangle {
     registry::OrientedPlane plane;
     std::array<registry::OrientedPlane, 3> walls;
+    std::int32_t cut_id;
   };
   std::vector<InsertedTriangle> inserted_;
   std::vector<std::int32_t> tet_touch_stamp_;  // per tet: last insertion that reported it

@@ -60,7 +60,7 @@ class Keys {
     }
     // Weight k vanishes exactly where the point lies on the face opposite node k. Faces of refined
     // tets have registry planes (cached exact forms); others are built here.
-    const Index tet = copies_.copy_tet[copy];
+    const Index tet = copies_.copy_tet()[copy];
     const Points& rest = mesh_.rest();
     const Tets& tets = mesh_.tets();
     std::uint8_t mask = 0;
@@ -78,7 +78,7 @@ class Keys {
       if (side == 0) mask = static_cast<std::uint8_t>(mask | (1u << k));
     }
     VertexKey key{mesh_.num_nodes() + static_cast<std::int64_t>(v), {-1, -1, -1, -1}};
-    for (int k = 0; k < 4; ++k) key.nodes[k] = (mask >> k) & 1u ? -1 : copies_.copy_nodes(copy, k);
+    for (int k = 0; k < 4; ++k) key.nodes[k] = (mask >> k) & 1u ? -1 : copies_.copy_nodes()[copy][k];
     std::sort(key.nodes.begin(), key.nodes.end());
     polygon->keys.push_back(key);
     polygon->points.push_back(key.point);
@@ -87,7 +87,7 @@ class Keys {
 
   // Corner for mesh node `node` in tet copy `copy`.
   void add_node(Index node, Index copy, Polygon* polygon) const {
-    const Index tet = copies_.copy_tet[copy];
+    const Index tet = copies_.copy_tet()[copy];
     std::uint8_t mask = 0;
     int local = 0;
     for (int k = 0; k < 4; ++k) {
@@ -97,7 +97,7 @@ class Keys {
         mask = static_cast<std::uint8_t>(mask | (1u << k));
       }
     }
-    polygon->keys.push_back(VertexKey{node, {-1, -1, -1, copies_.copy_nodes(copy, local)}});
+    polygon->keys.push_back(VertexKey{node, {-1, -1, -1, copies_.copy_nodes()[copy][local]}});
     polygon->points.push_back(node);
     polygon->zero_mask.push_back(mask);
   }
@@ -176,17 +176,13 @@ void triangulate_facet(const CellComplex& complex, const Facet& facet, bool reve
   triangulate_convex_polygon(std::move(strict), reverse, triangles);
 }
 
-MaterialSurface extract_material_surface(const CellComplex& complex, const components::MaterialComponents& components,
-                                         const connectivity::TetCopies& copies) {
+MaterialSurface extract_material_surface(const CellComplex& complex, const connectivity::TetCopies& copies) {
   const TetMesh& mesh = complex.mesh();
   const TetAdjacency& adj = mesh.adjacency();
   const registry::IntersectionRegistry& reg = complex.registry();
   reg.update_positions();
   const Keys keys(complex, copies);
-  const auto copy_on = [&](Side s) -> Index {
-    if (cells::is_cell(s)) return copies.copy_of(complex.cells()[s].tet, components.cell_component[s]);
-    return copies.first_copy[cells::unrefined_tet(s)];
-  };
+  const auto copy_on = [&](Side s) { return copies.copy_on(complex, s); };
 
   // 1. Polygons, in parallel. Slot 2f (back side) and 2f + 1 (front side) of facet f, then two
   //    per mesh face for the whole faces of unrefined tets. A first pass says which slots hold a
@@ -232,7 +228,7 @@ MaterialSurface extract_material_surface(const CellComplex& complex, const compo
         Polygon* polygon = polygon_at(2 * f + (front ? 1 : 0));
         if (polygon == nullptr) continue;
         polygon->copy = copy_on(front ? facet.front : facet.back);
-        polygon->source = facet.covered() ? facet.cut
+        polygon->source = facet.covered() ? complex.cut_id(facet)
                           : facet.mesh_face >= 0 ? face_source(facet.mesh_face)
                                                  : std::numeric_limits<std::int64_t>::min();
         // Stored order is outward for the cell behind the facet.
@@ -252,7 +248,7 @@ MaterialSurface extract_material_surface(const CellComplex& complex, const compo
         const Index tet = adj.tets_of_face(face)[i];
         int local = 0;
         while (adj.tet_faces(tet, local) != face) ++local;
-        polygon->copy = copies.first_copy[tet];
+        polygon->copy = copies.copy_of(tet, 0);
         polygon->source = face_source(face);
         std::vector<std::uint8_t> strict;
         for (int k = 0; k < 3; ++k) {
@@ -315,7 +311,7 @@ MaterialSurface extract_material_surface(const CellComplex& complex, const compo
                          ? Vec3(mesh.rest().row(static_cast<Index>(vertex.point)).transpose())
                          : reg.position(static_cast<VertexId>(vertex.point - mesh.num_nodes()));
       result.surface.vertices.row(v) = p.transpose();
-      result.vertex_weights.row(v) = barycentric(mesh, copies.copy_tet[vertex.copy], p, vertex.zero_mask).transpose();
+      result.vertex_weights.row(v) = barycentric(mesh, copies.copy_tet()[vertex.copy], p, vertex.zero_mask).transpose();
       result.vertex_tet[v] = vertex.copy;
     }
   });

@@ -14,14 +14,11 @@
 #include <vector>
 
 #include "cells/cell_complex.hpp"
-#include "components/material_components.hpp"
 #include "connectivity/tet_copies.hpp"
 
 namespace tetcut::surface {
 
-MaterialSurface extract_material_surface(const cells::CellComplex& complex,
-                                         const components::MaterialComponents& components,
-                                         const connectivity::TetCopies& copies);
+MaterialSurface extract_material_surface(const cells::CellComplex& complex, const connectivity::TetCopies& copies);
 
 /// Triangulates a convex polygon whose consecutive corners may be collinear, with no zero-area
 /// triangle: ear clipping at strict corners (where the boundary turns). `strict[i]` says whether

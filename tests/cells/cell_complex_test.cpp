@@ -196,7 +196,7 @@ TEST(CellComplex, CoveringIsCountedOncePerTriangleWithItsOrientation) {
     ++covered;
     const int sign = geometry::normal_component_sign(c.registry.plane(f.plane), 2);
     EXPECT_EQ(f.winding * sign, 2);
-    EXPECT_EQ(f.cut, 0);  // the first triangle that covered it
+    EXPECT_EQ(c.complex.cut_id(f), 0);  // the first triangle that covered it
   }
   EXPECT_EQ(covered, 1);
 }
