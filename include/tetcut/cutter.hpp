@@ -105,13 +105,21 @@ class Cutter {
   /// tets the batch touches and their cells, plus O(log T) per triangle.
   CutBatchReport cut(const TriangleSurface& batch);
 
-  /// Cuts by a batch of triangles given in world space, on the cut mesh deformed to `nodes`
-  /// (num_nodes() x 3 current positions). Each tet copy that a triangle touches in its current
-  /// shape takes its own copy of the triangle, pulled back through its motion into rest space, and
-  /// only that copy's material is cut; copies sharing a face and its nodes agree on it exactly.
-  /// Copies inverted or flat in `nodes` are skipped and reported. Throws Error(kInvalidInput) when
-  /// `nodes` has the wrong size or a non-finite entry. Cost: as cut(), plus O(copies) to bound
-  /// the copies in their current positions.
+  /// Sets the current (deformed) positions of the cut mesh's nodes: num_nodes() x 3. Throws
+  /// Error(kInvalidInput) on a wrong size or a non-finite entry. Refits the bounding boxes of the
+  /// copies in their current shapes: O(copies), in parallel. Nodes that later batches add start
+  /// at the position of the node they were split from.
+  void set_current(const Points& nodes);
+  /// The current positions (the input's, until set_current).
+  Points current() const;
+
+  /// Cuts by a batch of triangles given in world space, on the cut mesh in its current positions
+  /// (set_current). Each tet copy that a triangle touches in its current shape takes its own copy
+  /// of the triangle, pulled back through its motion into rest space, and only that copy's
+  /// material is cut; copies sharing a face and its nodes agree on it exactly. Copies inverted or
+  /// flat in their current positions are skipped and reported. Cost: as cut().
+  CutBatchReport cut_deformed(const TriangleSurface& batch);
+  /// set_current(nodes), then cut_deformed(batch).
   CutBatchReport cut_deformed(const TriangleSurface& batch, const Points& nodes);
 
   /// The cut mesh as it stands: node and tet counts, each copy's nodes (in its input tet's order),
@@ -122,8 +130,8 @@ class Cutter {
   const std::vector<Index>& node_parent() const;
   const std::vector<Index>& tet_parent() const;
 
-  /// The simulation mesh, pieces and material surface for all batches so far. Current positions
-  /// are those given to the last cut_deformed (new nodes at their sources), or the input's.
+  /// The simulation mesh, pieces and material surface for all batches so far, with the current
+  /// positions.
   /// O(T + refined cells).
   CutResult result() const;
 

@@ -20,6 +20,8 @@
 #include "spatial/box_tree.hpp"
 #include "surface/material_surface.hpp"
 
+#include <tbb/parallel_for.h>
+
 namespace tetcut {
 namespace {
 
@@ -67,14 +69,31 @@ int wall_axis(const geometry::Plane& plane) {
 }  // namespace
 
 struct Cutter::State {
-  explicit State(TetMesh m)
-      : mesh(std::move(m)), registry(mesh.rest()), complex(mesh, registry), copies(mesh, complex), current(mesh.current()) {
+  explicit State(TetMesh m) : mesh(std::move(m)), registry(mesh.rest()), complex(mesh, registry), copies(mesh, complex) {
     std::vector<spatial::Aabb> boxes(static_cast<std::size_t>(mesh.num_tets()));
     for (Index t = 0; t < mesh.num_tets(); ++t) {
       for (int k = 0; k < 4; ++k) boxes[t].extend(mesh.rest().row(mesh.tets()(t, k)).transpose());
     }
     rest_tets = spatial::BoxTree(std::move(boxes));
     components.count.assign(static_cast<std::size_t>(mesh.num_tets()), 1);
+    current.resize(static_cast<std::size_t>(mesh.num_nodes()));
+    for (Index n = 0; n < mesh.num_nodes(); ++n) current[n] = mesh.current().row(n).transpose();
+  }
+
+  spatial::Aabb current_box(Index copy) const {
+    spatial::Aabb box;
+    for (const Index n : copies.copy_nodes()[copy]) box.extend(current[n]);
+    return box;
+  }
+
+  // Copies whose current boxes may meet `box`: the tree of the copies as of the last
+  // set_current, and the copies made since. A copy made since has the box of its source until
+  // then, since new nodes start where their sources are.
+  void query_current(const spatial::Aabb& box, std::vector<Index>* out) const {
+    if (current_copies.size() != 0) current_copies.query(box, out);
+    for (const Index copy : copies_since_set) {
+      if (current_box(copy).meets(box)) out->push_back(copy);
+    }
   }
 
   // Recomputes the touched tets' components and updates copies and nodes; fills the report.
@@ -84,10 +103,8 @@ struct Cutter::State {
     components::update_components(complex, touched, &components);
     connectivity::TetCopies::Update update = copies.update(complex, components, touched);
     // New nodes start where the nodes they were split from are.
-    current.conservativeResize(copies.num_nodes(), 3);
-    for (std::size_t i = 0; i < update.new_node_source.size(); ++i) {
-      current.row(update.first_new_node + static_cast<Index>(i)) = current.row(update.new_node_source[i]);
-    }
+    for (const Index source : update.new_node_source) current.push_back(current[source]);
+    for (Index c = update.first_new_copy; c < copies.num_copies(); ++c) copies_since_set.push_back(c);
     report->tets_touched = static_cast<Index>(touched.size());
     report->touched = std::move(touched);
     report->first_new_node = update.first_new_node;
@@ -111,8 +128,10 @@ struct Cutter::State {
   cells::CellComplex complex;
   connectivity::TetCopies copies;
   components::MaterialComponents components;  // of refined tets; unrefined ones have one
-  Points current;                              // per node of the cut mesh
+  std::vector<Vec3> current;                   // per node of the cut mesh
   spatial::BoxTree rest_tets;
+  spatial::BoxTree current_copies;             // copies in their current shapes, as of set_current
+  std::vector<Index> copies_since_set;         // copies made since set_current
   std::int64_t next_cut_id = 0;
 };
 
@@ -150,28 +169,50 @@ CutBatchReport Cutter::cut(const TriangleSurface& batch) {
   return report;
 }
 
-CutBatchReport Cutter::cut_deformed(const TriangleSurface& batch, const Points& nodes) {
+void Cutter::set_current(const Points& nodes) {
   State& s = *state_;
-  check_batch(batch);
   if (nodes.rows() != num_nodes()) {
     throw Error(ErrorKind::kInvalidInput, "deformed positions: " + std::to_string(nodes.rows()) + " rows for " +
                                               std::to_string(num_nodes()) + " nodes of the cut mesh");
   }
   if (!nodes.allFinite()) throw Error(ErrorKind::kInvalidInput, "deformed positions: a coordinate is not finite");
-  s.current = nodes;
-  // The copies in their current shapes.
-  const auto& copy_nodes = s.copies.copy_nodes();
-  const Index num_copies = s.copies.num_copies();
-  std::vector<spatial::Aabb> boxes(static_cast<std::size_t>(num_copies));
-  for (Index c = 0; c < num_copies; ++c) {
-    for (const Index n : copy_nodes[c]) boxes[c].extend(nodes.row(n).transpose());
+  for (Index n = 0; n < num_nodes(); ++n) s.current[n] = nodes.row(n).transpose();
+  std::vector<spatial::Aabb> boxes(static_cast<std::size_t>(s.copies.num_copies()));
+  tbb::parallel_for(tbb::blocked_range<Index>(0, s.copies.num_copies(), 4096), [&](const auto& range) {
+    for (Index c = range.begin(); c != range.end(); ++c) boxes[c] = s.current_box(c);
+  });
+  // Refit while the tree covers most copies; rebuild when many were made since it was built.
+  if (s.current_copies.size() > 0 && s.copies_since_set.size() * 16 < static_cast<std::size_t>(s.current_copies.size())) {
+    std::vector<spatial::Aabb> fitted(boxes.begin(), boxes.begin() + s.current_copies.size());
+    s.current_copies.refit(std::move(fitted));
+    s.copies_since_set.erase(std::remove_if(s.copies_since_set.begin(), s.copies_since_set.end(),
+                                            [&](Index c) { return c < s.current_copies.size(); }),
+                             s.copies_since_set.end());
+  } else {
+    s.current_copies = spatial::BoxTree(std::move(boxes));
+    s.copies_since_set.clear();
   }
-  const spatial::BoxTree current_copies(std::move(boxes));
+}
 
+Points Cutter::current() const {
+  Points p(num_nodes(), 3);
+  for (Index n = 0; n < num_nodes(); ++n) p.row(n) = state_->current[n].transpose();
+  return p;
+}
+
+CutBatchReport Cutter::cut_deformed(const TriangleSurface& batch, const Points& nodes) {
+  set_current(nodes);
+  return cut_deformed(batch);
+}
+
+CutBatchReport Cutter::cut_deformed(const TriangleSurface& batch) {
+  State& s = *state_;
+  check_batch(batch);
+  if (s.current_copies.size() == 0 && s.copies_since_set.empty()) set_current(current());
+  const auto& copy_nodes = s.copies.copy_nodes();
   CutBatchReport report;
   report.triangles = batch.num_triangles();
   std::vector<Index> candidates, touched;
-  std::vector<std::uint8_t> inverted_checked;  // per candidate copy seen: 0 unknown, 1 fine, 2 inverted
   for (Index i = 0; i < batch.num_triangles(); ++i) {
     const std::array<Vec3, 3> corners = corners_of(batch, i);
     const std::int32_t id = s.next_id(batch.num_triangles() - i);
@@ -190,11 +231,11 @@ CutBatchReport Cutter::cut_deformed(const TriangleSurface& batch, const Points& 
     std::array<std::pair<const geometry::Plane*, int>, 3> walls_with_signs;
     for (int e = 0; e < 3; ++e) walls_with_signs[e] = {&world_walls[e], 1};
     candidates.clear();
-    current_copies.query(box_of(corners), &candidates);
+    s.query_current(box_of(corners), &candidates);
     for (const Index copy : candidates) {
       std::array<Vec3, 4> now, rest;
       for (int k = 0; k < 4; ++k) {
-        now[k] = nodes.row(copy_nodes[copy][k]).transpose();
+        now[k] = s.current[copy_nodes[copy][k]];
         rest[k] = s.mesh.rest().row(s.mesh.tets()(s.copies.copy_tet()[copy], k)).transpose();
       }
       // In world space first, on the copy's current corners: does the triangle cover part of it?
@@ -243,7 +284,7 @@ CutResult Cutter::result() const {
     for (int k = 0; k < 4; ++k) tets(c, k) = s.copies.copy_nodes()[c][k];
   }
   out.mesh = TetMesh(std::move(rest), std::move(tets));
-  out.mesh.set_current(s.current);
+  out.mesh.set_current(current());
   out.node_parent = s.copies.node_parent();
   out.tet_parent = s.copies.copy_tet();
   out.tet_piece = pieces.copy_piece;

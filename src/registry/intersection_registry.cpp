@@ -131,10 +131,8 @@ const geometry::ExactPoint& IntersectionRegistry::exact_point(VertexId v) const 
 
 namespace {
 
-int defining_count(const Plane& plane) { return plane.kind() == Plane::Kind::kWall ? 2 : 3; }
-
 bool defines(const Plane& plane, const Vec3& x) {
-  for (int i = 0; i < defining_count(plane); ++i) {
+  for (int i = 0; i < plane.num_defining_points(); ++i) {
     if (plane.points()[i] == x) return true;
   }
   return false;
@@ -154,7 +152,7 @@ bool IntersectionRegistry::on_plane_by_construction(VertexId v, PlaneId q) const
     const Plane& c = planes_[vertex.planes[(i + 2) % 3]];
     const Vec3* shared[3];
     int count = 0;
-    for (int k = 0; k < defining_count(a); ++k) {
+    for (int k = 0; k < a.num_defining_points(); ++k) {
       const Vec3& x = a.points()[k];
       if (defines(b, x)) {
         bool repeated = false;
@@ -290,11 +288,12 @@ void IntersectionRegistry::update_positions() const {
     positions_.resize(vertices_.size());
     has_position_.resize(vertices_.size(), 0);
   }
-  tbb::parallel_for(tbb::blocked_range<VertexId>(0, num_vertices(), 1024), [&](const auto& range) {
+  tbb::parallel_for(tbb::blocked_range<VertexId>(positions_done_, num_vertices(), 1024), [&](const auto& range) {
     for (VertexId v = range.begin(); v != range.end(); ++v) {
       if (!has_position_[v]) compute_position(v);
     }
   });
+  positions_done_ = num_vertices();
 }
 
 }  // namespace tetcut::registry

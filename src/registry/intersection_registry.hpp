@@ -79,6 +79,12 @@ class IntersectionRegistry {
   /// Side of q at an input point. Exact; zero at once when x defines q.
   int side_of_input(PlaneId q, const Vec3& x) const;
 
+  /// Whether v lies on q by construction, decided from the input points defining the planes: a
+  /// plane passes through its defining points, and two planes through the same two points meet
+  /// in the line through them. Sound, not complete (false says nothing); side() asks it before the
+  /// exact path, to settle the commonest zeros (corners and edges shared by a surface's triangles).
+  bool on_plane_by_construction(VertexId v, PlaneId q) const;
+
   /// Coordinates of v, correctly rounded or nearly (geometry::tpi_coordinates). For output only.
   const Vec3& position(VertexId v) const;
   /// Exact rational coordinates of v (slow: for measurements rounding cannot settle). Uses no
@@ -87,7 +93,8 @@ class IntersectionRegistry {
   /// Bound on the error of each rounded coordinate of position(), relative to the position's
   /// largest coordinate (see geometry::tpi_coordinates).
   static double position_tolerance();
-  /// Computes every missing position, in parallel, so position() is then a plain read.
+  /// Computes every missing position, in parallel, so position() is then a plain read. Only the
+  /// vertices added since the last call are visited: O(new vertices).
   void update_positions() const;
 
   const geometry::Plane& plane(PlaneId p) const { return planes_[p]; }
@@ -102,11 +109,6 @@ class IntersectionRegistry {
 
  private:
   int compute_side(VertexId v, PlaneId q) const;
-  /// Decides that v lies on q from the input points defining the planes, when it can: a plane
-  /// passes through its defining points, and two planes through the same two points meet in the
-  /// line through them. Sound, not complete; it spares the exact path for the commonest zeros
-  /// (points on edges and corners shared by triangles of a surface).
-  bool on_plane_by_construction(VertexId v, PlaneId q) const;
   void compute_position(VertexId v) const;
   // Exact forms, computed when a filter first fails and kept: later exact tests on the same plane
   // or point are then a four-term integer dot product.
@@ -129,6 +131,7 @@ class IntersectionRegistry {
   mutable std::vector<std::unique_ptr<geometry::ExactPoint>> exact_points_;
   mutable std::vector<Vec3> positions_;
   mutable std::vector<std::uint8_t> has_position_;
+  mutable VertexId positions_done_ = 0;  // update_positions() has filled every vertex below this
   std::unordered_map<PointsKey, PlaneId, KeyHash> triangle_planes_;
   std::unordered_map<PointsKey, PlaneId, KeyHash> walls_;
 

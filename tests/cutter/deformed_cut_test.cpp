@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <tetcut/blade.hpp>
 #include <tetcut/cutter.hpp>
 #include <tetcut/error.hpp>
 #include <tetcut/figures.hpp>
@@ -168,6 +169,59 @@ TEST(DeformedCut, WrongPositionsAreRejected) {
   Points bad = figures::figure2_tet().rest();
   bad(1, 1) = std::nan("");
   EXPECT_THROW(cutter.cut_deformed(figures::axis_square(2, 0.3, -2, 2), bad), Error);
+}
+
+// Positions set once, then many world-space batches: copies made by one batch are found by the
+// next through the cutter's own record of where new nodes are.
+TEST(DeformedCut, PositionsSetOnceServeManyBatches) {
+  const TetMesh mesh = make_bcc(Box{}, 0.25);
+  Points lifted = mesh.rest();
+  lifted.col(2).array() += 0.3 * lifted.col(0).array();
+  const TriangleSurface sphere = figures::icosphere(Vec3(0.5, 0.5, 0.6), 0.3, 2);
+  Cutter whole(mesh), steps(mesh);
+  whole.cut_deformed(sphere, lifted);
+  steps.set_current(lifted);
+  for (Index first = 0; first < sphere.num_triangles(); first += 5) {
+    TriangleSurface batch;
+    batch.vertices = sphere.vertices;
+    batch.triangles = sphere.triangles.middleRows(first, std::min<Index>(5, sphere.num_triangles() - first));
+    steps.cut_deformed(batch);
+  }
+  const CutResult a = whole.result(), b = steps.result();
+  EXPECT_EQ(testing::check_cut_invariants(mesh, b), "");
+  expect_same_pieces(a, b, 1e-12);
+  EXPECT_EQ(a.mesh.mesh.num_tets(), b.mesh.mesh.num_tets());
+  EXPECT_EQ(b.mesh.num_pieces(), 2);
+}
+
+// A blade swept along a path makes a strip with no gaps; a blade that goes right through a block
+// and across it separates the block, step by step.
+TEST(SweptBlade, StripAreaAndAScalpelCut) {
+  // A vertical blade from z = -0.5 to z = 1.5, moved along x at y = 0.45 in 10 steps.
+  std::vector<BladePose> poses;
+  for (int i = 0; i <= 10; ++i) {
+    const double x = -0.25 + 1.5 * i / 10.0;
+    poses.push_back({Vec3(x, 0.45, -0.5), Vec3(x, 0.45, 1.5)});
+  }
+  poses.push_back(poses.back());  // the blade stopped: no zero-area triangles come of it
+  const TriangleSurface strip = swept_blade(poses);
+  EXPECT_EQ(strip.num_triangles(), 20);
+  EXPECT_NEAR(measure_surface(strip).area, 1.5 * 2.0, 1e-12);
+  // Cutting a block with it, two steps per batch.
+  const TetMesh block = make_grid(Box{}, {3, 3, 3}, 6);
+  Cutter cutter(block);
+  for (std::size_t i = 0; i + 1 < poses.size(); i += 2) {
+    const std::size_t end = std::min(poses.size(), i + 3);
+    cutter.cut(swept_blade(std::span<const BladePose>(poses.data() + i, end - i)));
+    // Until the blade has gone all the way across, the block holds together.
+    if (poses[end - 1].a[0] < 1) {
+      ASSERT_EQ(cutter.result().mesh.num_pieces(), 1) << i;
+    }
+  }
+  const CutResult r = cutter.result();
+  EXPECT_EQ(testing::check_cut_invariants(block, r), "");
+  ASSERT_EQ(r.mesh.num_pieces(), 2);
+  EXPECT_NEAR(r.mesh.piece_volumes[1], 0.45, 1e-13);
 }
 
 }  // namespace
