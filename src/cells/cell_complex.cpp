@@ -560,9 +560,9 @@ void CellComplex::cover(FacetId f) {
   facet.stamp = insertion_.stamp;
   if (facet.covering < 0) facet.covering = insertion_.stamp;
   const OrientedPlane& plane = insertion_.triangle->plane;
-  const int alignment = facet.plane == plane.id
-                            ? 1
-                            : geometry::plane_alignment(registry_->plane(facet.plane), registry_->plane(plane.id));
+  // The facet lies on the plane (its corners do, exactly); only the orientation is left, the sign
+  // of the two normals' dot product, which is far from zero for equal planes.
+  const int alignment = facet.plane == plane.id ? 1 : registry_->normal_alignment(facet.plane, plane.id);
   if (alignment == 0) broken("a covered facet is not on the cut plane");
   facet.winding += alignment * plane.sign;
   touch_side(facet.front);

@@ -7,6 +7,9 @@
 namespace tetcut::components {
 namespace {
 
+// Below this many tets the work is done on the calling thread.
+constexpr std::size_t kParallelFrom = 512;
+
 using cells::CellComplex;
 using cells::CellId;
 
@@ -76,6 +79,11 @@ void update_components(const CellComplex& complex, std::span<const Index> tets, 
   result->cell_component.resize(complex.cells().size(), -1);
   result->cell_volume6.resize(complex.cells().size(), 0.0);
   complex.registry().update_positions();
+  // A batch touches tens of tets: waking threads would cost more than the work.
+  if (tets.size() < kParallelFrom) {
+    for (const Index t : tets) tet_components(complex, t, result);
+    return;
+  }
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, tets.size(), 16), [&](const auto& range) {
     for (std::size_t i = range.begin(); i != range.end(); ++i) tet_components(complex, tets[i], result);
   });

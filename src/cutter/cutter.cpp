@@ -8,6 +8,9 @@
 #include <tetcut/error.hpp>
 
 #include <algorithm>
+#include <deque>
+#include <map>
+#include <unordered_map>
 #include <chrono>
 #include <cmath>
 #include <string>
@@ -65,6 +68,97 @@ int wall_axis(const geometry::Plane& plane) {
   }
   return axis;
 }
+
+// The distinct planes of the cuts so far. Triangles on one plane (a straight blade sweeps a flat
+// strip, batch after batch) share one plane, and in world space one pulled-back plane per copy, so
+// that what one triangle leaves on the plane the next recognises by plane id instead of by exact
+// arithmetic. Each plane gets a key unique over all batches (from the cut id of the first triangle
+// on it), which names it to the registry's symbolic test of where two copies' pull-backs agree.
+class PlaneBook {
+ public:
+  struct Found {
+    std::int64_t key;
+    int sign;  // +1 when the stored plane has the orientation asked for
+    const geometry::Plane* plane;
+  };
+
+  // The triangle plane `plane`, or an equal one seen before. O(1) expected: a hash of the rounded,
+  // normalised coefficients proposes candidates, and equality is decided exactly.
+  Found triangle_plane(const geometry::Plane& plane, std::int64_t fresh_key) {
+    const std::array<std::int64_t, 4> cell = grid_cell(plane);
+    auto& bucket = planes_[cell];
+    for (const std::size_t index : bucket) {
+      const Entry& e = entries_[index];
+      const int alignment = geometry::plane_alignment(e.plane, plane);
+      if (alignment != 0) return {e.key, alignment, &e.plane};
+    }
+    bucket.push_back(entries_.size());
+    entries_.push_back({plane, fresh_key});
+    return {fresh_key, 1, &entries_.back().plane};
+  }
+
+  // The wall through edge (p, q) along `axis`, oriented towards `inner`; one per edge and axis.
+  Found wall(const Vec3& p, const Vec3& q, int axis, const Vec3& inner, std::int64_t fresh_key) {
+    std::array<double, 7> key;
+    const bool swap = std::lexicographical_compare(q.data(), q.data() + 3, p.data(), p.data() + 3);
+    const Vec3& a = swap ? q : p;
+    const Vec3& b = swap ? p : q;
+    for (int k = 0; k < 3; ++k) {
+      key[k] = a[k] + 0.0;  // + 0.0 folds -0.0 into 0.0
+      key[3 + k] = b[k] + 0.0;
+    }
+    key[6] = axis;
+    auto it = walls_.find(key);
+    if (it == walls_.end()) it = walls_.emplace(key, Entry{geometry::Plane::wall(a, b, axis), fresh_key}).first;
+    return {it->second.key, geometry::side_of_point(it->second.plane, inner), &it->second.plane};
+  }
+
+  // A registry plane per key and copy (copy -1: rest space), made once by `make`.
+  template <typename Make>
+  registry::PlaneId per_copy(std::int64_t key, Index copy, Make&& make) {
+    const auto [it, inserted] = per_copy_.try_emplace({key, copy}, -1);
+    if (inserted) it->second = make();
+    return it->second;
+  }
+  // Pulled-back planes depend on the current positions: forget them when those change.
+  void forget_pulled_back() {
+    std::erase_if(per_copy_, [](const auto& entry) { return entry.first.second >= 0; });
+  }
+
+ private:
+  // Normalised coefficients rounded to a grid of 2^-30: representations of one plane fall in one
+  // cell unless they straddle a grid line, which costs a missed sharing, never correctness.
+  static std::array<std::int64_t, 4> grid_cell(const geometry::Plane& plane) {
+    Eigen::Vector4d c = plane.rounded();
+    const double n = c.head<3>().norm();
+    if (n > 0) c /= n;
+    // One orientation for both: the first clearly non-zero coefficient positive.
+    for (int k = 0; k < 4; ++k) {
+      if (std::abs(c[k]) > 1e-6) {
+        if (c[k] < 0) c = -c;
+        break;
+      }
+    }
+    std::array<std::int64_t, 4> cell;
+    for (int k = 0; k < 4; ++k) cell[k] = std::llround(std::ldexp(c[k], 30));
+    return cell;
+  }
+  struct Entry {
+    geometry::Plane plane;
+    std::int64_t key;
+  };
+  struct CellHash {
+    std::size_t operator()(const std::array<std::int64_t, 4>& c) const {
+      std::uint64_t h = 0x9e3779b97f4a7c15ULL;
+      for (const std::int64_t x : c) h = (h ^ static_cast<std::uint64_t>(x)) * 0xbf58476d1ce4e5b9ULL;
+      return static_cast<std::size_t>(h ^ (h >> 31));
+    }
+  };
+  std::deque<Entry> entries_;  // a deque keeps the planes in place for the pointers handed out
+  std::unordered_map<std::array<std::int64_t, 4>, std::vector<std::size_t>, CellHash> planes_;
+  std::map<std::array<double, 7>, Entry> walls_;
+  std::map<std::pair<std::int64_t, Index>, registry::PlaneId> per_copy_;
+};
 
 }  // namespace
 
@@ -130,6 +224,7 @@ struct Cutter::State {
   components::MaterialComponents components;  // of refined tets; unrefined ones have one
   std::vector<Vec3> current;                   // per node of the cut mesh
   spatial::BoxTree rest_tets;
+  PlaneBook planes;
   spatial::BoxTree current_copies;             // copies in their current shapes, as of set_current
   std::vector<Index> copies_since_set;         // copies made since set_current
   std::int64_t next_cut_id = 0;
@@ -153,7 +248,7 @@ CutBatchReport Cutter::cut(const TriangleSurface& batch) {
   check_batch(batch);
   CutBatchReport report;
   report.triangles = batch.num_triangles();
-  std::vector<Index> candidates, touched;
+    std::vector<Index> candidates, touched;
   for (Index i = 0; i < batch.num_triangles(); ++i) {
     const std::array<Vec3, 3> corners = corners_of(batch, i);
     const std::int32_t id = s.next_id(batch.num_triangles() - i);
@@ -161,9 +256,20 @@ CutBatchReport Cutter::cut(const TriangleSurface& batch) {
       report.degenerate.push_back(i);
       continue;
     }
+    cells::PreparedTriangle t;
+    t.cut_id = id;
+    t.corners_are_inputs = true;
+    t.corners = corners;
+    const PlaneBook::Found plane = s.planes.triangle_plane(geometry::Plane::through(corners[0], corners[1], corners[2]), 4 * std::int64_t{id});
+    t.plane = {s.planes.per_copy(plane.key, -1, [&] { return s.registry.add_plane(*plane.plane); }), plane.sign};
+    const int axis = wall_axis(*plane.plane);
+    for (int e = 0; e < 3; ++e) {
+      // Rest-space walls come from the registry, which keeps one per edge and axis across batches.
+      t.walls[e] = s.registry.wall(corners[e], corners[(e + 1) % 3], axis, corners[(e + 2) % 3]);
+    }
     candidates.clear();
     s.rest_tets.query(box_of(corners), &candidates);
-    s.complex.insert_triangle(cells::CutTriangle{corners[0], corners[1], corners[2], id}, candidates, &touched);
+    s.complex.insert_triangle(t, candidates, -1, &touched);
   }
   s.finish_batch(std::move(touched), &report);
   return report;
@@ -177,6 +283,7 @@ void Cutter::set_current(const Points& nodes) {
   }
   if (!nodes.allFinite()) throw Error(ErrorKind::kInvalidInput, "deformed positions: a coordinate is not finite");
   for (Index n = 0; n < num_nodes(); ++n) s.current[n] = nodes.row(n).transpose();
+  s.planes.forget_pulled_back();
   std::vector<spatial::Aabb> boxes(static_cast<std::size_t>(s.copies.num_copies()));
   tbb::parallel_for(tbb::blocked_range<Index>(0, s.copies.num_copies(), 4096), [&](const auto& range) {
     for (Index c = range.begin(); c != range.end(); ++c) boxes[c] = s.current_box(c);
@@ -212,7 +319,7 @@ CutBatchReport Cutter::cut_deformed(const TriangleSurface& batch) {
   const auto& copy_nodes = s.copies.copy_nodes();
   CutBatchReport report;
   report.triangles = batch.num_triangles();
-  std::vector<Index> candidates, touched;
+    std::vector<Index> candidates, touched;
   for (Index i = 0; i < batch.num_triangles(); ++i) {
     const std::array<Vec3, 3> corners = corners_of(batch, i);
     const std::int32_t id = s.next_id(batch.num_triangles() - i);
@@ -220,16 +327,19 @@ CutBatchReport Cutter::cut_deformed(const TriangleSurface& batch) {
       report.degenerate.push_back(i);
       continue;
     }
-    // The triangle in world space: its plane, and walls oriented towards the opposite corner.
-    const geometry::Plane world = geometry::Plane::through(corners[0], corners[1], corners[2]);
-    const int axis = wall_axis(world);
+    // The triangle in world space: its plane, and walls oriented towards the opposite corner
+    // (shared with earlier triangles of the batch on the same plane or edge).
+    const PlaneBook::Found plane = s.planes.triangle_plane(geometry::Plane::through(corners[0], corners[1], corners[2]), 4 * std::int64_t{id});
+    const geometry::Plane world = plane.sign > 0 ? *plane.plane : plane.plane->flipped();
+    const int axis = wall_axis(*plane.plane);
+    std::array<PlaneBook::Found, 3> walls;
     std::array<geometry::Plane, 3> world_walls;
-    for (int e = 0; e < 3; ++e) {
-      world_walls[e] = geometry::Plane::wall(corners[e], corners[(e + 1) % 3], axis);
-      if (geometry::side_of_point(world_walls[e], corners[(e + 2) % 3]) < 0) world_walls[e] = world_walls[e].flipped();
-    }
     std::array<std::pair<const geometry::Plane*, int>, 3> walls_with_signs;
-    for (int e = 0; e < 3; ++e) walls_with_signs[e] = {&world_walls[e], 1};
+    for (int e = 0; e < 3; ++e) {
+      walls[e] = s.planes.wall(corners[e], corners[(e + 1) % 3], axis, corners[(e + 2) % 3], 4 * std::int64_t{id} + 1 + e);
+      world_walls[e] = walls[e].sign > 0 ? *walls[e].plane : walls[e].plane->flipped();
+      walls_with_signs[e] = {&world_walls[e], 1};
+    }
     candidates.clear();
     s.query_current(box_of(corners), &candidates);
     for (const Index copy : candidates) {
@@ -251,11 +361,19 @@ CutBatchReport Cutter::cut_deformed(const TriangleSurface& batch) {
         continue;
       }
       if (!cells::tet_may_meet_triangle(now, world, walls_with_signs, corner_side)) continue;
-      // Pull the triangle back into this copy's rest space, for this copy's cells only.
+      // Pull the triangle back into this copy's rest space, for this copy's cells only. The keys
+      // name the world planes, so that the registry can tell where two copies' pull-backs agree.
       cells::PreparedTriangle t;
       t.cut_id = id;
-      t.plane = {s.registry.add_plane(geometry::Plane::pulled_back(world, rest, now)), 1};
-      for (int e = 0; e < 3; ++e) t.walls[e] = {s.registry.add_plane(geometry::Plane::pulled_back(world_walls[e], rest, now)), 1};
+      const auto pulled = [&](const PlaneBook::Found& found) -> registry::OrientedPlane {
+        return {s.planes.per_copy(found.key, copy,
+                                [&] {
+                                  return s.registry.add_plane(geometry::Plane::pulled_back(*found.plane, rest, now, found.key));
+                                }),
+                found.sign};
+      };
+      t.plane = pulled(plane);
+      for (int e = 0; e < 3; ++e) t.walls[e] = pulled(walls[e]);
       const Index tet = s.copies.copy_tet()[copy];
       s.complex.insert_triangle(t, std::span<const Index>(&tet, 1), static_cast<std::int32_t>(copy), &touched);
     }

@@ -87,12 +87,6 @@ Approx value_at(const std::array<Approx, 4>& c, const Vec3& x) {
 
 }  // namespace
 
-struct Plane::PullBack {
-  Plane world;
-  std::array<Vec3, 4> rest;
-  std::array<Vec3, 4> current;
-};
-
 Plane Plane::through(const Vec3& p, const Vec3& q, const Vec3& r) {
   Plane plane;
   plane.kind_ = Kind::kThroughPoints;
@@ -110,10 +104,11 @@ Plane Plane::wall(const Vec3& p, const Vec3& q, int axis) {
   return plane;
 }
 
-Plane Plane::pulled_back(const Plane& world, const std::array<Vec3, 4>& rest, const std::array<Vec3, 4>& current) {
+Plane Plane::pulled_back(const Plane& world, const std::array<Vec3, 4>& rest, const std::array<Vec3, 4>& current,
+                         std::int64_t world_key) {
   Plane plane;
   plane.kind_ = Kind::kPulledBack;
-  plane.pull_back_ = std::make_shared<const PullBack>(PullBack{world, rest, current});
+  plane.pull_back_ = std::make_shared<const PullBack>(PullBack{world, rest, current, world_key});
   plane.compute_approx();
   return plane;
 }
@@ -176,30 +171,47 @@ Eigen::Vector4d Plane::rounded() const {
 ExactPlane Plane::exact() const {
   ExactPlane c;
   if (kind_ == Kind::kPulledBack) {
-    // Q = -sum_k world(current[k]) (n_k, d_k) in rationals, world taken by its own exact form (a
-    // positive multiple), then every term brought to integers by the largest denominator (all
-    // denominators are powers of two: the inputs are doubles).
+    // Q = -sum_k world(current[k]) (n_k, d_k) in integers. world(current[k]) times lambda W_k is
+    // the integer V_k (lambda: the world plane's own factor; W_k = 2^e_k: the point's), brought to
+    // the common factor W_max by shifting. The rest faces (n_k, d_k) come from the four rest
+    // corners scaled by one 2^s, so they carry 2^(2s) and 2^(3s), rescaled at the end as in the
+    // other kinds. Every factor is positive.
     const PullBack& b = *pull_back_;
     const ExactPlane w = b.world.exact();
-    std::array<mpq_class, 4> q;
+    std::array<mpz_class, 4> value;
+    mp_bitcnt_t largest = 0;
+    std::array<mp_bitcnt_t, 4> exponent{};
     for (int k = 0; k < 4; ++k) {
-      const Vec3& x = b.current[k];
-      const mpq_class world_value = w[0] * mpq_class(x[0]) + w[1] * mpq_class(x[1]) + w[2] * mpq_class(x[2]) + w[3];
-      const auto& f = kTetFaces[k];
-      std::array<mpq_class, 3> a, u, v;
-      for (int i = 0; i < 3; ++i) {
-        a[i] = b.rest[f[0]][i];
-        u[i] = mpq_class(b.rest[f[1]][i]) - a[i];
-        v[i] = mpq_class(b.rest[f[2]][i]) - a[i];
-      }
-      const std::array<mpq_class, 3> n = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
-      const mpq_class d = -(n[0] * a[0] + n[1] * a[1] + n[2] * a[2]);
-      for (int i = 0; i < 3; ++i) q[i] -= world_value * n[i];
-      q[3] -= world_value * d;
+      const ExactPoint x = exact_point(b.current[k]);
+      value[k] = w[0] * x[0] + w[1] * x[1] + w[2] * x[2] + w[3] * x[3];
+      exponent[k] = mpz_sizeinbase(x[3].get_mpz_t(), 2) - 1;  // x[3] is a power of two
+      largest = std::max(largest, exponent[k]);
     }
-    mpz_class denominator = 1;
-    for (const mpq_class& x : q) denominator = lcm(denominator, mpz_class(x.get_den()));
-    for (int i = 0; i < 4; ++i) c[i] = mpz_class(q[i] * denominator);
+    ScaledInputs scale;
+    for (const Vec3& r : b.rest) scale.include(r);
+    std::array<std::array<mpz_class, 3>, 4> r;
+    for (int k = 0; k < 4; ++k) {
+      for (int i = 0; i < 3; ++i) r[k][i] = scale.integer(b.rest[k][i]);
+    }
+    for (int i = 0; i < 4; ++i) c[i] = 0;
+    for (int k = 0; k < 4; ++k) {
+      multiply_by_power_of_two(value[k], static_cast<int>(largest - exponent[k]));
+      const auto& f = kTetFaces[k];
+      mpz_class u[3], v[3];
+      for (int i = 0; i < 3; ++i) {
+        u[i] = r[f[1]][i] - r[f[0]][i];
+        v[i] = r[f[2]][i] - r[f[0]][i];
+      }
+      const mpz_class n[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
+      const mpz_class d = -(n[0] * r[f[0]][0] + n[1] * r[f[0]][1] + n[2] * r[f[0]][2]);
+      for (int i = 0; i < 3; ++i) c[i] -= value[k] * n[i];
+      c[3] -= value[k] * d;
+    }
+    if (scale.scale >= 0) {
+      for (int k = 0; k < 3; ++k) multiply_by_power_of_two(c[k], scale.scale);
+    } else {
+      multiply_by_power_of_two(c[3], -scale.scale);
+    }
   } else {
     // Integer coefficients of the plane through the inputs scaled by 2^s: the normal is multiplied
     // by 2^(k s) and d by 2^((k + 1) s) (k = 2, or 1 for a wall). Multiplying the normal by another

@@ -47,11 +47,14 @@ class Plane {
   /// rest volume. So Q(X) has the sign of world(phi(X)), and on a face of the tet it depends only
   /// on that face's corners: tets sharing a face and its current corners agree on it exactly.
   /// Zero coefficients (a current tet flat within `world`) must be rejected by the caller.
-  static Plane pulled_back(const Plane& world, const std::array<Vec3, 4>& rest, const std::array<Vec3, 4>& current);
+  static Plane pulled_back(const Plane& world, const std::array<Vec3, 4>& rest, const std::array<Vec3, 4>& current,
+                           std::int64_t world_key = -1);
   /// The same plane with the opposite normal.
   Plane flipped() const;
 
   Kind kind() const { return kind_; }
+  /// Whether this is a flipped copy of the plane as defined.
+  bool is_flipped() const { return flipped_; }
   int axis() const { return axis_; }
   /// Defining points: three for kThroughPoints, the first two for kWall, none for kPulledBack.
   const std::array<Vec3, 3>& points() const { return points_; }
@@ -67,8 +70,13 @@ class Plane {
   /// The exact form, computed afresh (callers cache it).
   ExactPlane exact() const;
 
- private:
+  /// For a pulled-back plane: the world plane, the tet's rest and current corners, and the
+  /// caller's key naming the world plane (pulled-back planes with the same key come from the same
+  /// world plane; -1: no key). Null for the other kinds.
   struct PullBack;
+  const PullBack* pull_back() const { return pull_back_.get(); }
+
+ private:
   void compute_approx();
 
   Kind kind_ = Kind::kThroughPoints;
@@ -77,6 +85,13 @@ class Plane {
   std::array<Vec3, 3> points_{};
   std::array<Approx, 4> approx_{};
   std::shared_ptr<const PullBack> pull_back_;
+};
+
+struct Plane::PullBack {
+  Plane world;
+  std::array<Vec3, 4> rest;
+  std::array<Vec3, 4> current;
+  std::int64_t world_key = -1;
 };
 
 /// Sign of n . x + d for an input point x. Exact.

@@ -140,35 +140,129 @@ bool defines(const Plane& plane, const Vec3& x) {
 
 }  // namespace
 
+namespace {
+
+// Whether two pulled-back planes of the same world plane move the input point x alike: x is a
+// rest corner of both tets, with the same current position in both.
+bool moved_alike(const Plane::PullBack& a, const Plane::PullBack& b, const Vec3& x) {
+  for (int i = 0; i < 4; ++i) {
+    if (a.rest[i] != x) continue;
+    for (int j = 0; j < 4; ++j) {
+      if (b.rest[j] == x) return a.current[i] == b.current[j];
+    }
+  }
+  return false;
+}
+
+bool same_motion(const Plane::PullBack& a, const Plane::PullBack& b) { return a.rest == b.rest && a.current == b.current; }
+
+// Inputs that two planes both pass through by definition (at most two kept: two distinct ones fix
+// the line the planes meet in).
+struct Shared {
+  const Vec3* points[2];
+  int count = 0;
+};
+Shared shared_inputs(const Plane& a, const Plane& b) {
+  Shared s;
+  for (int k = 0; k < a.num_defining_points() && s.count < 2; ++k) {
+    const Vec3& x = a.points()[k];
+    if (defines(b, x) && (s.count == 0 || *s.points[0] != x)) s.points[s.count++] = &x;
+  }
+  return s;
+}
+
+// The point where a, b and c meet lies on `target` by the inputs defining them: two of the planes
+// through the same two distinct inputs meet in the line through them, which holds the point; three
+// through one input meet only there.
+bool on_plane_by_inputs(const std::array<const Plane*, 3>& p, const Plane& target) {
+  for (int i = 0; i < 3; ++i) {
+    const Shared s = shared_inputs(*p[i], *p[(i + 1) % 3]);
+    for (int m = 0; m < s.count; ++m) {
+      if (!defines(target, *s.points[m])) continue;
+      if (defines(*p[(i + 2) % 3], *s.points[m])) return true;
+      if (s.count == 2 && defines(target, *s.points[1 - m])) return true;
+    }
+  }
+  return false;
+}
+
+// The same for pulled-back planes, where the rules above hold one level up:
+//  - through one copy's motion, pulling back keeps incidence, so planes all pulled back through
+//    the same motion follow the rules of their world planes;
+//  - pull-backs of one world plane agree wherever their tets' motions agree: on a face or an edge
+//    of input points both tets have, with the same current positions. A point on one of them that
+//    lies by construction on such a face (one of its planes passes through three inputs) or edge
+//    (two of its planes share two inputs) is on the other.
+bool on_pulled_back_plane(const std::array<const Plane*, 3>& p, const Plane& target) {
+  const Plane::PullBack* to = target.pull_back();
+  if (to == nullptr) return false;
+  if (p[0]->pull_back() && p[1]->pull_back() && p[2]->pull_back() && same_motion(*p[0]->pull_back(), *to) &&
+      same_motion(*p[1]->pull_back(), *to) && same_motion(*p[2]->pull_back(), *to)) {
+    if (on_plane_by_inputs({&p[0]->pull_back()->world, &p[1]->pull_back()->world, &p[2]->pull_back()->world}, to->world)) {
+      return true;
+    }
+  }
+  if (to->world_key < 0) return false;
+  for (int i = 0; i < 3; ++i) {
+    const Plane::PullBack* from = p[i]->pull_back();
+    if (from == nullptr || from->world_key != to->world_key) continue;
+    for (int j = 1; j < 3; ++j) {
+      const Plane& other = *p[(i + j) % 3];
+      if (other.kind() == Plane::Kind::kThroughPoints && moved_alike(*from, *to, other.points()[0]) &&
+          moved_alike(*from, *to, other.points()[1]) && moved_alike(*from, *to, other.points()[2])) {
+        return true;
+      }
+    }
+    const Shared line = shared_inputs(*p[(i + 1) % 3], *p[(i + 2) % 3]);
+    if (line.count == 2 && moved_alike(*from, *to, *line.points[0]) && moved_alike(*from, *to, *line.points[1])) {
+      return true;
+    }
+  }
+  return false;
+}
+
+// When the point where a, b and c meet is an input point x by construction, the side of any plane
+// there is its side at x, a cheap exact test. That is so when two of the planes pass through x by
+// definition and the third contains x. For planes pulled back through one motion the same holds one
+// level up, with the world planes and the world point. Returns the side, or 2 when not known.
+int side_at_input(const std::array<const Plane*, 3>& p, const Plane& target) {
+  const Plane* level[3] = {p[0], p[1], p[2]};
+  const Plane* q = &target;
+  const Plane::PullBack* motion = p[0]->pull_back();
+  if (motion != nullptr) {
+    // All four pulled back through the same motion: work with their world planes.
+    for (const Plane* plane : {p[1], p[2], &target}) {
+      if (plane->pull_back() == nullptr || !same_motion(*plane->pull_back(), *motion)) return 2;
+    }
+    for (int i = 0; i < 3; ++i) level[i] = &p[i]->pull_back()->world;
+    q = &target.pull_back()->world;
+  } else if (p[1]->pull_back() || p[2]->pull_back() || target.pull_back()) {
+    return 2;
+  }
+  for (int i = 0; i < 3; ++i) {
+    const Plane& a = *level[i];
+    const Plane& b = *level[(i + 1) % 3];
+    const Plane& c = *level[(i + 2) % 3];
+    for (int k = 0; k < a.num_defining_points(); ++k) {
+      const Vec3& x = a.points()[k];
+      if (defines(b, x) && (defines(c, x) || geometry::side_of_point(c, x) == 0)) {
+        // A pulled-back plane has its world plane's sign at the image point, unless flipped itself.
+        const int s = geometry::side_of_point(*q, x);
+        return motion != nullptr && target.is_flipped() ? -s : s;
+      }
+    }
+  }
+  return 2;
+}
+
+}  // namespace
+
 bool IntersectionRegistry::on_plane_by_construction(VertexId v, PlaneId q) const {
   const Vertex& vertex = vertices_[v];
   const Plane& target = planes_[q];
   if (vertex.node >= 0) return defines(target, rest_->row(vertex.node).transpose());
-  // Two of the point's planes through the same two distinct inputs a and b meet in line ab, which
-  // holds the point; three through one input x meet only at x.
-  for (int i = 0; i < 3; ++i) {
-    const Plane& a = planes_[vertex.planes[i]];
-    const Plane& b = planes_[vertex.planes[(i + 1) % 3]];
-    const Plane& c = planes_[vertex.planes[(i + 2) % 3]];
-    const Vec3* shared[3];
-    int count = 0;
-    for (int k = 0; k < a.num_defining_points(); ++k) {
-      const Vec3& x = a.points()[k];
-      if (defines(b, x)) {
-        bool repeated = false;
-        for (int m = 0; m < count; ++m) repeated = repeated || *shared[m] == x;
-        if (!repeated) shared[count++] = &x;
-      }
-    }
-    for (int m = 0; m < count; ++m) {
-      if (!defines(target, *shared[m])) continue;
-      if (defines(c, *shared[m])) return true;  // the point is that input
-      for (int n = m + 1; n < count; ++n) {
-        if (defines(target, *shared[n])) return true;  // the point is on the line through both
-      }
-    }
-  }
-  return false;
+  const std::array<const Plane*, 3> p = {&planes_[vertex.planes[0]], &planes_[vertex.planes[1]], &planes_[vertex.planes[2]]};
+  return on_plane_by_inputs(p, target) || on_pulled_back_plane(p, target);
 }
 
 int IntersectionRegistry::compute_side(VertexId v, PlaneId q) const {
@@ -180,7 +274,21 @@ int IntersectionRegistry::compute_side(VertexId v, PlaneId q) const {
   const int s = geometry::certain_sign(p[0] * h[0] + p[1] * h[1] + p[2] * h[2] + p[3] * h[3]);
   if (s != 2) return s * vertex.orientation;
   if (on_plane_by_construction(v, q)) return 0;
+  if (vertex.node < 0) {
+    const int at_input = side_at_input({&planes_[vertex.planes[0]], &planes_[vertex.planes[1]], &planes_[vertex.planes[2]]}, planes_[q]);
+    if (at_input != 2) return at_input;
+  }
   return geometry::exact_side(exact_plane(q), exact_point(v));
+}
+
+int IntersectionRegistry::normal_alignment(PlaneId a, PlaneId b) const {
+  const auto& p = planes_[a].approx();
+  const auto& q = planes_[b].approx();
+  const int s = geometry::certain_sign(p[0] * q[0] + p[1] * q[1] + p[2] * q[2]);
+  if (s != 2) return s;
+  const geometry::ExactPlane& ea = exact_plane(a);
+  const geometry::ExactPlane& eb = exact_plane(b);
+  return sgn(mpz_class(ea[0] * eb[0] + ea[1] * eb[1] + ea[2] * eb[2]));
 }
 
 int IntersectionRegistry::side_of_input(PlaneId q, const Vec3& x) const {
@@ -208,6 +316,10 @@ int IntersectionRegistry::side_of_meet(PlaneId a, PlaneId b, PlaneId c, PlaneId 
   const int w = geometry::certain_sign(h[3]);
   const int s = geometry::certain_sign(p[0] * h[0] + p[1] * h[1] + p[2] * h[2] + p[3] * h[3]);
   if (w != 2 && w != 0 && s != 2) return s * w;
+  const std::array<const Plane*, 3> meeting = {&planes_[a], &planes_[b], &planes_[c]};
+  if (on_plane_by_inputs(meeting, planes_[q]) || on_pulled_back_plane(meeting, planes_[q])) return 0;
+  const int at_input = side_at_input(meeting, planes_[q]);
+  if (at_input != 2) return at_input;
   return geometry::exact_side(exact_plane(q), geometry::exact_tpi(exact_plane(a), exact_plane(b), exact_plane(c)));
 }
 
@@ -288,11 +400,19 @@ void IntersectionRegistry::update_positions() const {
     positions_.resize(vertices_.size());
     has_position_.resize(vertices_.size(), 0);
   }
-  tbb::parallel_for(tbb::blocked_range<VertexId>(positions_done_, num_vertices(), 1024), [&](const auto& range) {
-    for (VertexId v = range.begin(); v != range.end(); ++v) {
+  const auto fill = [&](VertexId begin, VertexId end) {
+    for (VertexId v = begin; v != end; ++v) {
       if (!has_position_[v]) compute_position(v);
     }
-  });
+  };
+  // A batch adds a few hundred points: waking threads would cost more than the work.
+  constexpr VertexId kParallelFrom = 4096;
+  if (num_vertices() - positions_done_ < kParallelFrom) {
+    fill(positions_done_, num_vertices());
+  } else {
+    tbb::parallel_for(tbb::blocked_range<VertexId>(positions_done_, num_vertices(), 1024),
+                      [&](const auto& range) { fill(range.begin(), range.end()); });
+  }
   positions_done_ = num_vertices();
 }
 

@@ -78,6 +78,8 @@ class IntersectionRegistry {
   int side_of_meet(PlaneId a, PlaneId b, PlaneId c, PlaneId q) const;
   /// Side of q at an input point. Exact; zero at once when x defines q.
   int side_of_input(PlaneId q, const Vec3& x) const;
+  /// Sign of the dot product of two planes' normals. Exact.
+  int normal_alignment(PlaneId a, PlaneId b) const;
 
   /// Whether v lies on q by construction, decided from the input points defining the planes: a
   /// plane passes through its defining points, and two planes through the same two points meet

@@ -299,6 +299,39 @@ TEST_F(PlaneTest, PulledBackPlaneHasTheSignOfTheWorldPlaneAtTheDeformedPoint) {
   }
 }
 
+// The exact form of a pulled-back plane, evaluated anywhere, is one positive multiple of
+// world(phi(X)), computed independently in rationals.
+TEST_F(PlaneTest, PulledBackExactFormIsAPositiveMultipleOfTheReference) {
+  std::mt19937_64 generator(23);
+  std::uniform_real_distribution<double> unit(-1, 1);
+  const auto point = [&]() -> Vec3 { return Vec3(unit(generator), unit(generator), unit(generator)); };
+  for (int trial = 0; trial < 100; ++trial) {
+    Deformed t = random_deformed(generator);
+    // Corners of very different magnitudes, so the points' own scales differ.
+    t.current[1] *= 1024;
+    t.current[2] /= 512;
+    const Plane world = trial % 2 ? Plane::wall(point(), point(), 1) : Plane::through(point(), point(), point());
+    const ExactPlane e = Plane::pulled_back(world, t.rest, t.current).exact();
+    mpq_class ratio = 0;
+    for (int sample = 0; sample < 6; ++sample) {
+      const Vec3 x = point();
+      const Q3 q = {mpq_class(x[0]), mpq_class(x[1]), mpq_class(x[2])};
+      const Q3 y = deform(t, q);
+      const auto c = reference_plane(world);
+      const mpq_class reference = c[0] * y[0] + c[1] * y[1] + c[2] * y[2] + c[3];
+      const mpq_class value = e[0] * q[0] + e[1] * q[1] + e[2] * q[2] + e[3];
+      if (reference == 0) {
+        ASSERT_EQ(value, 0);
+        continue;
+      }
+      const mpq_class r = value / reference;
+      ASSERT_GT(r, 0) << trial;
+      if (ratio == 0) ratio = r;
+      ASSERT_EQ(r, ratio) << trial;
+    }
+  }
+}
+
 TEST_F(PlaneTest, TetsSharingAFaceAgreeOnItExactly) {
   std::mt19937_64 generator(22);
   std::uniform_real_distribution<double> unit(-1, 1);
