@@ -11,6 +11,7 @@
 #include <fmt/ranges.h>
 
 #include <chrono>
+#include <optional>
 #include <filesystem>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -162,6 +163,7 @@ struct NamedBatch {
 struct CutOutputs {
   fs::path mesh, surface, report;
   bool binary = false;
+  bool deformed = false;  // write current (deformed) positions instead of rest positions
   TetMeshWriteOptions mesh_options;
 
   // Checks every output before any work, so a typo costs nothing and nothing is half written.
@@ -176,16 +178,23 @@ struct CutOutputs {
   }
 };
 
-// Cuts `mesh` by the batches in order, prints warnings and a summary, and writes the outputs.
+// Cuts `mesh` by the batches in order, prints warnings and a summary, and writes the outputs. With
+// `deformed` positions, the batches are placed in world space on that configuration.
 CutResult cut_and_report(const std::string& name, const TetMesh& mesh, const std::vector<NamedBatch>& batches,
-                         const CutOutputs& outputs, double read_seconds) {
+                         const CutOutputs& outputs, double read_seconds, const Points* deformed = nullptr) {
   auto start = Clock::now();
   Cutter cutter(mesh);
-  Index triangles = 0, skipped = 0;
+  if (deformed != nullptr) cutter.set_current(*deformed);
+  Index triangles = 0, skipped = 0, inverted = 0;
   for (const NamedBatch& batch : batches) {
-    const CutBatchReport report = cutter.cut(batch.triangles);
+    const CutBatchReport report = deformed != nullptr ? cutter.cut_deformed(batch.triangles) : cutter.cut(batch.triangles);
     triangles += report.triangles;
     skipped += static_cast<Index>(report.degenerate.size());
+    inverted += static_cast<Index>(report.skipped_inverted.size());
+    if (!report.skipped_inverted.empty()) {
+      fmt::print(stderr, "tetcut: warning: {}: {} tet(s) inverted or flat in the deformed positions were not cut there\n",
+                 batch.name, report.skipped_inverted.size());
+    }
     if (!report.degenerate.empty()) {
       fmt::print(stderr, "tetcut: warning: {}: skipped {} zero-area triangle(s), the first is triangle {}\n", batch.name,
                  report.degenerate.size(), report.degenerate.front());
@@ -199,15 +208,21 @@ CutResult cut_and_report(const std::string& name, const TetMesh& mesh, const std
   start = Clock::now();
   if (!outputs.mesh.empty()) {
     TetMeshWriteOptions options = cut_mesh_write_options(result.mesh, mesh, outputs.mesh_options);
+    options.current_positions = outputs.deformed;
     write_tet_mesh(outputs.mesh, result.mesh.mesh, options);
   }
-  if (!outputs.surface.empty()) write_surface(outputs.surface, result.surface.surface, SurfaceWriteOptions{outputs.binary});
+  if (!outputs.surface.empty()) {
+    TriangleSurface surface = result.surface.surface;
+    if (outputs.deformed) surface.vertices = result.surface.positions(result.mesh, result.mesh.mesh.current());
+    write_surface(outputs.surface, surface, SurfaceWriteOptions{outputs.binary});
+  }
   const double write_seconds = seconds_since(start);
 
   const SurfaceStats surface = measure_surface(result.surface.surface);
   double volume = 0;
   for (const double v : result.mesh.piece_volumes) volume += v;
-  fmt::print("cut {} by {} batch(es): {} triangles", name, batches.size(), triangles);
+  fmt::print("cut {} by {} batch(es): {} triangles{}", name, batches.size(), triangles,
+             deformed != nullptr ? " placed on the deformed mesh" : "");
   if (skipped > 0) fmt::print(" ({} zero-area, skipped)", skipped);
   fmt::print("\n");
   fmt::print("  tets             {} -> {}\n", mesh.num_tets(), result.mesh.mesh.num_tets());
@@ -234,6 +249,8 @@ CutResult cut_and_report(const std::string& name, const TetMesh& mesh, const std
         {"tets_out", result.mesh.mesh.num_tets()},
         {"triangles", triangles},
         {"zero_area_triangles_skipped", skipped},
+        {"world_space", deformed != nullptr},
+        {"inverted_tets_skipped", inverted},
         {"pieces", result.mesh.num_pieces()},
         {"piece_volumes", result.mesh.piece_volumes},
         {"volume", volume},
@@ -409,6 +426,7 @@ void add_cut_command(CLI::App& app, Action& action) {
   struct Options {
     fs::path mesh;
     std::vector<fs::path> cuts;
+    fs::path deform;
     CutOutputs outputs;
     MeshOutputOptions out;
   };
@@ -427,11 +445,17 @@ void add_cut_command(CLI::App& app, Action& action) {
                       "Write the material surface (" + supported_surface_extensions() + ")");
   command->add_option("--report", options->outputs.report, "Write a JSON report: counts, piece volumes, surface, timings");
   command->add_flag("--binary", options->outputs.binary, "Binary PLY or STL surface output");
+  command->add_option("--deform", options->deform,
+                      "A tet mesh with the same nodes and tets in deformed positions: the cuts are placed in world "
+                      "space on that configuration (tets inverted there are not cut, with a warning)");
+  command->add_flag("--write-deformed", options->outputs.deformed,
+                    "Write the mesh and surface in their current (deformed) positions instead of rest positions");
   options->out.add(command);
   command->callback([options, &action] {
     action = [options] {
       std::vector<fs::path> inputs = options->cuts;
       inputs.push_back(options->mesh);
+      if (!options->deform.empty()) inputs.push_back(options->deform);
       options->outputs.check(inputs);
       const auto start = Clock::now();
       const TetMesh mesh = read_tet_mesh(options->mesh);
@@ -442,8 +466,11 @@ void add_cut_command(CLI::App& app, Action& action) {
           throw Error(ErrorKind::kInvalidInput, "the cut has no triangles", path.string());
         }
       }
+      std::optional<Points> deformed;
+      if (!options->deform.empty()) deformed = read_deformed_positions(options->deform, mesh);
       options->outputs.mesh_options = options->out.write_options();
-      cut_and_report(options->mesh.string(), mesh, batches, options->outputs, seconds_since(start));
+      cut_and_report(options->mesh.string(), mesh, batches, options->outputs, seconds_since(start),
+                     deformed ? &*deformed : nullptr);
       return 0;
     };
   });

@@ -50,6 +50,12 @@ FileKind file_kind(const std::filesystem::path& path);
 
 /// Reads a tet mesh. For TetGen, `path` may name the .node or the .ele file; both are read.
 TetMesh read_tet_mesh(const std::filesystem::path& path);
+/// Reads the positions of a deformed configuration of `reference`: a tet mesh file with the same
+/// node count and the same tets, whose positions are the deformed ones. Tets may be inverted there
+/// (nothing checks their orientation). Throws Error(kInvalidInput) naming the file when the nodes or
+/// tets differ or a coordinate is not finite.
+Points read_deformed_positions(const std::filesystem::path& path, const TetMesh& reference);
+
 /// Writes a tet mesh. For TetGen, both `stem.node` and `stem.ele` are written.
 void write_tet_mesh(const std::filesystem::path& path, const TetMesh& mesh, const TetMeshWriteOptions& options = {});
 

@@ -50,32 +50,64 @@ FileKind file_kind(const std::filesystem::path& path) {
   return FileKind::kUnknown;
 }
 
-TetMesh read_tet_mesh(const std::filesystem::path& path) {
+namespace {
+
+// Parses a tet mesh file by its extension, without building (and so without validating) a TetMesh.
+io::TetMeshData parse_tet_mesh(const std::filesystem::path& path, std::string* source) {
   const std::string ext = io::extension_of(path);
-  io::TetMeshData data;
-  std::string source = path.string();
+  *source = path.string();
   if (ext == ".node" || ext == ".ele") {
     std::filesystem::path node_path = path, ele_path = path;
     node_path.replace_extension(".node");
     ele_path.replace_extension(".ele");
     io::TetgenNodes nodes = io::read_tetgen_nodes(io::read_file(node_path), node_path.string());
-    data = io::read_tetgen_elements(std::move(nodes), io::read_file(ele_path), ele_path.string());
-    source = ele_path.string();
-  } else {
-    const std::string bytes = io::read_file(path);
-    if (ext == ".mesh") {
-      data = io::read_medit(bytes, source);
-    } else if (ext == ".msh") {
-      data = io::read_gmsh(bytes, source);
-    } else if (ext == ".vtu") {
-      data = io::read_vtu(bytes, source);
-    } else if (ext == ".vtk") {
-      data = io::read_vtk_legacy(bytes, source);
-    } else {
-      unknown_extension(path, "tet mesh", supported_tet_mesh_extensions());
+    *source = ele_path.string();
+    return io::read_tetgen_elements(std::move(nodes), io::read_file(ele_path), ele_path.string());
+  }
+  const std::string bytes = io::read_file(path);
+  if (ext == ".mesh") return io::read_medit(bytes, *source);
+  if (ext == ".msh") return io::read_gmsh(bytes, *source);
+  if (ext == ".vtu") return io::read_vtu(bytes, *source);
+  if (ext == ".vtk") return io::read_vtk_legacy(bytes, *source);
+  unknown_extension(path, "tet mesh", supported_tet_mesh_extensions());
+}
+
+}  // namespace
+
+TetMesh read_tet_mesh(const std::filesystem::path& path) {
+  std::string source;
+  io::TetMeshData data = parse_tet_mesh(path, &source);
+  return TetMesh(std::move(data.points), std::move(data.tets), source, data.tet_lines);
+}
+
+Points read_deformed_positions(const std::filesystem::path& path, const TetMesh& reference) {
+  std::string source;
+  io::TetMeshData data = parse_tet_mesh(path, &source);
+  if (data.points.rows() != reference.num_nodes()) {
+    throw Error(ErrorKind::kInvalidInput,
+                "the deformed mesh has " + std::to_string(data.points.rows()) + " nodes, the mesh to cut " +
+                    std::to_string(reference.num_nodes()),
+                source);
+  }
+  if (data.tets.rows() != reference.num_tets()) {
+    throw Error(ErrorKind::kInvalidInput,
+                "the deformed mesh has " + std::to_string(data.tets.rows()) + " tets, the mesh to cut " +
+                    std::to_string(reference.num_tets()),
+                source);
+  }
+  for (Index t = 0; t < reference.num_tets(); ++t) {
+    if (data.tets.row(t) != reference.tets().row(t)) {
+      throw Error(ErrorKind::kInvalidInput,
+                  "tet " + std::to_string(t) + " has other nodes than in the mesh to cut",
+                  source, data.tet_lines.empty() ? 0 : data.tet_lines[t]);
     }
   }
-  return TetMesh(std::move(data.points), std::move(data.tets), source, data.tet_lines);
+  for (Index n = 0; n < data.points.rows(); ++n) {
+    if (!data.points.row(n).allFinite()) {
+      throw Error(ErrorKind::kInvalidInput, "node " + std::to_string(n) + " has a coordinate that is not finite", source);
+    }
+  }
+  return std::move(data.points);
 }
 
 void write_tet_mesh(const std::filesystem::path& path, const TetMesh& mesh, const TetMeshWriteOptions& options) {

@@ -53,6 +53,36 @@ expect_exit 0 "$TETCUT" cut cube.vtu far.obj
 expect_stderr "does not reach into the mesh"
 expect_stdout "pieces           1"
 
+# World space: the cube sheared by x' = x + 0.5 z, cut by the world plane x' = 0.6, which is the
+# rest plane x + 0.5 z = 0.6: pieces 0.65 and 0.35; the deformed surface is the sheared cube's skin
+# (four unit faces, two of area sqrt(1.25)) and both sides of a unit square.
+"$PYTHON" - <<'PY'
+import meshio
+m = meshio.read("cube.vtu")
+p = m.points.copy()
+p[:, 0] += 0.5 * p[:, 2]
+meshio.write("sheared.vtu", meshio.Mesh(p, m.cells))
+q = m.points.copy()
+q[:, 0] *= -1  # a mirror image: every tet inverted
+meshio.write("mirrored.vtu", meshio.Mesh(q, m.cells))
+PY
+printf 'v 0.6 -1 -1\nv 0.6 3 -1\nv 0.6 3 3\nv 0.6 -1 3\nf 1 2 3\nf 1 3 4\n' > x06.obj
+expect_exit 0 "$TETCUT" cut cube.vtu x06.obj --deform sheared.vtu --out-surface deformed.obj --write-deformed --report world.json
+expect_stdout "placed on the deformed mesh"
+json_check world.json 'j["world_space"] and j["pieces"] == 2 and abs(j["piece_volumes"][1] - 0.35) < 1e-12'
+expect_exit 0 "$TETCUT" info --json deformed.obj
+cp out.txt deformed.json
+json_check deformed.json 'j["closed"] and abs(j["area"] - (4 + 2 * 1.25 ** 0.5 + 2)) < 1e-12'
+# Inverted tets are not cut there, with a warning; a deformed file of another mesh is an error.
+printf 'v -0.4 -1 -1\nv -0.4 3 -1\nv -0.4 3 3\nv -0.4 -1 3\nf 1 2 3\nf 1 3 4\n' > xm04.obj
+expect_exit 0 "$TETCUT" cut cube.vtu xm04.obj --deform mirrored.vtu --report mirrored.json
+expect_stderr "inverted or flat"
+json_check mirrored.json 'j["pieces"] == 1 and j["inverted_tets_skipped"] > 0'
+expect_exit 0 "$TETCUT" grid --cells 2 2 2 -o small.vtu
+expect_exit 2 "$TETCUT" cut cube.vtu x06.obj --deform small.vtu
+expect_stderr "small.vtu"
+expect_stderr "the deformed mesh has 27 nodes"
+
 # Bad input: a clear message naming the file, exit 2, and no output written.
 printf '# nothing here\n' > empty.obj
 expect_exit 2 "$TETCUT" cut cube.vtu empty.obj --out-mesh never.vtu --report never.json
