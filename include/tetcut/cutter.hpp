@@ -122,6 +122,14 @@ class Cutter {
   /// set_current(nodes), then cut_deformed(batch).
   CutBatchReport cut_deformed(const TriangleSurface& batch, const Points& nodes);
 
+  /// Maps points given in world space, on the mesh in its current positions, to rest space: each
+  /// through the motion of a tet copy whose current shape holds it (the one it is deepest in), or,
+  /// outside every copy, of the copy nearest to it, extended. Copies inverted or flat in their
+  /// current positions are not used. Geometry, not topology: the result is rounded. Use it to
+  /// follow a blade in the material as the mesh moves (see swept_blade). |P| x 3 in, |P| x 3 out;
+  /// O(log copies) per point for points inside the mesh.
+  Points to_rest(const Points& world) const;
+
   /// The cut mesh as it stands: node and tet counts, each copy's nodes (in its input tet's order),
   /// and where each node and copy came from. O(1).
   Index num_nodes() const;

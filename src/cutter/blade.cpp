@@ -14,6 +14,7 @@ TriangleSurface swept_blade(std::span<const BladePose> poses) {
     s.vertices.row(2 * i) = poses[i].a.transpose();
     s.vertices.row(2 * i + 1) = poses[i].b.transpose();
   }
+
   std::vector<std::array<Index, 3>> triangles;
   const auto add = [&](Index p, Index q, Index r) {
     const Vec3 a = s.vertices.row(p), b = s.vertices.row(q), c = s.vertices.row(r);

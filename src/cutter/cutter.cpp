@@ -312,6 +312,53 @@ CutBatchReport Cutter::cut_deformed(const TriangleSurface& batch, const Points& 
   return cut_deformed(batch);
 }
 
+Points Cutter::to_rest(const Points& world) const {
+  const State& s = *state_;
+  if (s.current_copies.size() == 0 && s.copies_since_set.empty()) {
+    throw Error(ErrorKind::kInvalidArgument, "to_rest needs the current positions: call set_current first");
+  }
+  Points rest(world.rows(), 3);
+  std::vector<Index> candidates;
+  for (Eigen::Index i = 0; i < world.rows(); ++i) {
+    const Vec3 p = world.row(i).transpose();
+    // Look in a box around the point, growing until some copies are near.
+    spatial::Aabb box;
+    box.extend(p);
+    double reach = 0;
+    Index best = -1;
+    double best_depth = -std::numeric_limits<double>::infinity();
+    Eigen::Vector4d best_weights;
+    for (int attempt = 0; attempt < 64 && best < 0; ++attempt) {
+      candidates.clear();
+      s.query_current(box, &candidates);
+      for (const Index copy : candidates) {
+        const auto& nodes = s.copies.copy_nodes()[copy];
+        Eigen::Matrix3d edges;
+        for (int k = 0; k < 3; ++k) edges.col(k) = s.current[nodes[k + 1]] - s.current[nodes[0]];
+        if (!(edges.determinant() > 0)) continue;  // inverted or flat
+        const Vec3 w = edges.partialPivLu().solve(p - s.current[nodes[0]]);
+        const Eigen::Vector4d weights(1 - w.sum(), w[0], w[1], w[2]);
+        // Depth: the smallest weight; positive inside, and least negative for the nearest outside.
+        if (weights.minCoeff() > best_depth) {
+          best_depth = weights.minCoeff();
+          best = copy;
+          best_weights = weights;
+        }
+      }
+      // Grow the box: by the size of the mesh's boxes nearby, doubling.
+      reach = reach == 0 ? 1e-3 * (1 + p.cwiseAbs().maxCoeff()) : 2 * reach;
+      box.min = p - Vec3::Constant(reach);
+      box.max = p + Vec3::Constant(reach);
+    }
+    if (best < 0) throw Error(ErrorKind::kInvalidArgument, "to_rest: no tet copy near point " + std::to_string(i));
+    const Index tet = s.copies.copy_tet()[best];
+    Vec3 x = Vec3::Zero();
+    for (int k = 0; k < 4; ++k) x += best_weights[k] * s.mesh.rest().row(s.mesh.tets()(tet, k)).transpose();
+    rest.row(i) = x.transpose();
+  }
+  return rest;
+}
+
 CutBatchReport Cutter::cut_deformed(const TriangleSurface& batch) {
   State& s = *state_;
   check_batch(batch);
