@@ -138,10 +138,16 @@ class Cutter {
   const std::vector<Index>& node_parent() const;
   const std::vector<Index>& tet_parent() const;
 
+  /// The material surface as it stands. The surface is kept in patches, one per input tet; a
+  /// batch marks the patches of the tets it touched and of their neighbours, and only those are
+  /// rebuilt here, so after a batch this costs O(the batch's tets + surface size), the latter a
+  /// plain numbering pass. The result is the same as building it at once. Not const: it updates
+  /// the patches.
+  MaterialSurface surface();
+
   /// The simulation mesh, pieces and material surface for all batches so far, with the current
-  /// positions.
-  /// O(T + refined cells).
-  CutResult result() const;
+  /// positions. O(T log T + refined cells) for the mesh; the surface as surface().
+  CutResult result();
 
   const TetMesh& input() const;
   /// Cut triangles inserted so far (degenerate ones included in the numbering).

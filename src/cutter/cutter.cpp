@@ -163,7 +163,8 @@ class PlaneBook {
 }  // namespace
 
 struct Cutter::State {
-  explicit State(TetMesh m) : mesh(std::move(m)), registry(mesh.rest()), complex(mesh, registry), copies(mesh, complex) {
+  explicit State(TetMesh m)
+      : mesh(std::move(m)), registry(mesh.rest()), complex(mesh, registry), copies(mesh, complex), surface(mesh) {
     std::vector<spatial::Aabb> boxes(static_cast<std::size_t>(mesh.num_tets()));
     for (Index t = 0; t < mesh.num_tets(); ++t) {
       for (int k = 0; k < 4; ++k) boxes[t].extend(mesh.rest().row(mesh.tets()(t, k)).transpose());
@@ -196,6 +197,12 @@ struct Cutter::State {
     touched.erase(std::unique(touched.begin(), touched.end()), touched.end());
     components::update_components(complex, touched, &components);
     connectivity::TetCopies::Update update = copies.update(complex, components, touched);
+    // The surface patches that can change: those of the touched tets and their neighbours (cells,
+    // facets on shared faces, points on shared edges), and of copies whose nodes changed.
+    surface.mark_around(touched);
+    std::vector<Index> renumbered;
+    for (const Index copy : update.changed_copies) renumbered.push_back(copies.copy_tet()[copy]);
+    surface.mark(renumbered);
     // New nodes start where the nodes they were split from are.
     for (const Index source : update.new_node_source) current.push_back(current[source]);
     for (Index c = update.first_new_copy; c < copies.num_copies(); ++c) copies_since_set.push_back(c);
@@ -227,6 +234,7 @@ struct Cutter::State {
   PlaneBook planes;
   spatial::BoxTree current_copies;             // copies in their current shapes, as of set_current
   std::vector<Index> copies_since_set;         // copies made since set_current
+  surface::SurfacePatches surface;             // the material surface, rebuilt where batches changed it
   std::int64_t next_cut_id = 0;
 };
 
@@ -248,7 +256,7 @@ CutBatchReport Cutter::cut(const TriangleSurface& batch) {
   check_batch(batch);
   CutBatchReport report;
   report.triangles = batch.num_triangles();
-    std::vector<Index> candidates, touched;
+  std::vector<Index> candidates, touched;
   for (Index i = 0; i < batch.num_triangles(); ++i) {
     const std::array<Vec3, 3> corners = corners_of(batch, i);
     const std::int32_t id = s.next_id(batch.num_triangles() - i);
@@ -366,7 +374,7 @@ CutBatchReport Cutter::cut_deformed(const TriangleSurface& batch) {
   const auto& copy_nodes = s.copies.copy_nodes();
   CutBatchReport report;
   report.triangles = batch.num_triangles();
-    std::vector<Index> candidates, touched;
+  std::vector<Index> candidates, touched;
   for (Index i = 0; i < batch.num_triangles(); ++i) {
     const std::array<Vec3, 3> corners = corners_of(batch, i);
     const std::int32_t id = s.next_id(batch.num_triangles() - i);
@@ -432,10 +440,15 @@ CutBatchReport Cutter::cut_deformed(const TriangleSurface& batch) {
   return report;
 }
 
-CutResult Cutter::result() const {
+MaterialSurface Cutter::surface() {
+  State& s = *state_;
+  return s.surface.assemble(s.complex, s.copies);
+}
+
+CutResult Cutter::result() {
   using Clock = std::chrono::steady_clock;
   const auto seconds_since = [](Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); };
-  const State& s = *state_;
+  State& s = *state_;
   auto start = Clock::now();
   s.registry.update_positions();
   const connectivity::Pieces pieces = connectivity::find_pieces(s.complex, s.components, s.copies);
@@ -457,7 +470,7 @@ CutResult Cutter::result() const {
   out.piece_volumes = pieces.piece_volume;
   result.seconds_mesh = seconds_since(start);
   start = Clock::now();
-  result.surface = surface::extract_material_surface(s.complex, s.copies);
+  result.surface = s.surface.assemble(s.complex, s.copies);
   result.seconds_surface = seconds_since(start);
   return result;
 }

@@ -1,11 +1,10 @@
 #include "surface/material_surface.hpp"
 
-#include <Eigen/LU>
+#include <Eigen/LU>  // 3x3 inverse
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <limits>
-#include <unordered_map>
 
 namespace tetcut::surface {
 namespace {
@@ -25,23 +24,60 @@ struct VertexKey {
   bool operator==(const VertexKey&) const = default;
 };
 
-struct VertexKeyHash {
-  std::size_t operator()(const VertexKey& k) const {
-    std::uint64_t h = static_cast<std::uint64_t>(k.point) * 0x9e3779b97f4a7c15ULL;
-    for (const Index n : k.nodes) h = (h ^ static_cast<std::uint32_t>(n)) * 0xbf58476d1ce4e5b9ULL;
-    return static_cast<std::size_t>(h ^ (h >> 31));
+std::uint64_t hash_key(const VertexKey& k) {
+  std::uint64_t h = static_cast<std::uint64_t>(k.point) * 0x9e3779b97f4a7c15ULL;
+  for (const Index n : k.nodes) h = (h ^ static_cast<std::uint32_t>(n)) * 0xbf58476d1ce4e5b9ULL;
+  return h ^ (h >> 31);
+}
+
+// Vertex ids by key, for numbering the surface's corners: open addressing with linear probing
+// in one array that is reused from call to call, so numbering allocates nothing once warm (a
+// node-based map cost a malloc per vertex, and most of the time of an update after a batch).
+class VertexIds {
+ public:
+  // Empties the table, sized for up to `keys` distinct keys: never full. Callers pass the number
+  // of corners, several times the number of distinct vertices, so probes stay short.
+  void reset(std::size_t keys) {
+    std::size_t capacity = 16;
+    while (capacity <= keys) capacity *= 2;
+    if (slots_.size() != capacity) {
+      slots_.assign(capacity, Slot{});
+    } else {
+      std::fill(slots_.begin(), slots_.end(), Slot{});
+    }
   }
+  // The id of `key`, given `next` (and *inserted set) when it is new.
+  Index find_or_insert(const VertexKey& key, Index next, bool* inserted) {
+    const std::size_t mask = slots_.size() - 1;
+    for (std::size_t i = static_cast<std::size_t>(hash_key(key)) & mask;; i = (i + 1) & mask) {
+      Slot& slot = slots_[i];
+      if (slot.id < 0) {
+        slot = {key, next};
+        *inserted = true;
+        return next;
+      }
+      if (slot.key == key) {
+        *inserted = false;
+        return slot.id;
+      }
+    }
+  }
+
+ private:
+  struct Slot {
+    VertexKey key{};
+    Index id = -1;
+  };
+  std::vector<Slot> slots_;
 };
 
-// One polygon of the surface before its vertices get ids: corners as keys, triangles as corner
-// index triples.
-struct Polygon {
-  Index copy = -1;
-  std::int64_t source = 0;
-  std::vector<VertexKey> keys;
-  std::vector<std::int64_t> points;     // per corner: the point (see VertexKey::point)
-  std::vector<std::uint8_t> zero_mask;  // per corner: bit k set when weight k is exactly zero
-  std::vector<std::array<int, 3>> triangles;
+// A polygon corner before it gets a vertex id: its key, the copy whose material the polygon
+// bounds (the vertex is embedded there when this corner is its first use), and which of that
+// copy's barycentric weights vanish exactly there (bit k: weight k).
+struct PatchCorner {
+  VertexKey key;
+  Index copy;
+  std::uint8_t zero_mask;
 };
 
 // Computes keys of polygon corners; safe to run concurrently (side tests are, outside insertion).
@@ -51,11 +87,11 @@ class Keys {
       : complex_(complex), copies_(copies), mesh_(complex.mesh()) {}
 
   // Corner for registry vertex v in tet copy `copy`.
-  void add_vertex(VertexId v, Index copy, Polygon* polygon) const {
+  void add_vertex(VertexId v, Index copy, std::vector<PatchCorner>* corners) const {
     const registry::IntersectionRegistry& reg = complex_.registry();
     const Index node = reg.vertex(v).node;
     if (node >= 0) {
-      add_node(node, copy, polygon);
+      add_node(node, copy, corners);
       return;
     }
     // Weight k vanishes exactly where the point lies on the face opposite node k. Faces of refined
@@ -80,13 +116,11 @@ class Keys {
     VertexKey key{mesh_.num_nodes() + static_cast<std::int64_t>(v), {-1, -1, -1, -1}};
     for (int k = 0; k < 4; ++k) key.nodes[k] = (mask >> k) & 1u ? -1 : copies_.copy_nodes()[copy][k];
     std::sort(key.nodes.begin(), key.nodes.end());
-    polygon->keys.push_back(key);
-    polygon->points.push_back(key.point);
-    polygon->zero_mask.push_back(mask);
+    corners->push_back({key, copy, mask});
   }
 
   // Corner for mesh node `node` in tet copy `copy`.
-  void add_node(Index node, Index copy, Polygon* polygon) const {
+  void add_node(Index node, Index copy, std::vector<PatchCorner>* corners) const {
     const Index tet = copies_.copy_tet()[copy];
     std::uint8_t mask = 0;
     int local = 0;
@@ -97,9 +131,7 @@ class Keys {
         mask = static_cast<std::uint8_t>(mask | (1u << k));
       }
     }
-    polygon->keys.push_back(VertexKey{node, {-1, -1, -1, copies_.copy_nodes()[copy][local]}});
-    polygon->points.push_back(node);
-    polygon->zero_mask.push_back(mask);
+    corners->push_back({VertexKey{node, {-1, -1, -1, copies_.copy_nodes()[copy][local]}}, copy, mask});
   }
 
  private:
@@ -115,7 +147,7 @@ Eigen::Vector4d barycentric(const TetMesh& mesh, Index tet, const Vec3& p, std::
   const Vec3 r0 = rest.row(tets(tet, 0)).transpose();
   Eigen::Matrix3d edges;
   for (int k = 0; k < 3; ++k) edges.col(k) = rest.row(tets(tet, k + 1)).transpose() - r0;
-  const Vec3 w = edges.partialPivLu().solve(p - r0);
+  const Vec3 w = edges.inverse() * (p - r0);  // closed form: the rest tet is well shaped
   Eigen::Vector4d weights(1 - w.sum(), w[0], w[1], w[2]);
   for (int k = 0; k < 4; ++k) {
     if ((zero_mask >> k) & 1u) weights[k] = 0;
@@ -176,128 +208,286 @@ void triangulate_facet(const CellComplex& complex, const Facet& facet, bool reve
   triangulate_convex_polygon(std::move(strict), reverse, triangles);
 }
 
-MaterialSurface extract_material_surface(const CellComplex& complex, const connectivity::TetCopies& copies) {
-  const TetMesh& mesh = complex.mesh();
-  const TetAdjacency& adj = mesh.adjacency();
-  const registry::IntersectionRegistry& reg = complex.registry();
-  reg.update_positions();
-  const Keys keys(complex, copies);
-  const auto copy_on = [&](Side s) { return copies.copy_on(complex, s); };
+// A surface triangle of a patch: its corners (indices into the patch's corners), the copy whose
+// material it bounds, and its source (see MaterialSurface::triangle_source).
+struct PatchTriangle {
+  std::array<std::int32_t, 3> corners;
+  Index copy;
+  std::int64_t source;
+};
 
-  // 1. Polygons, in parallel. Slot 2f (back side) and 2f + 1 (front side) of facet f, then two
-  //    per mesh face for the whole faces of unrefined tets. A first pass says which slots hold a
-  //    polygon; only those are allocated, in slot order, so the result does not depend on
-  //    scheduling.
-  const auto& facets = complex.facets();
-  const std::size_t num_facets = facets.size();
-  const Index num_faces = adj.num_faces();
-  const Tets& tets = mesh.tets();
-  const auto facet_side_has_polygon = [&](std::size_t f, bool front) {
-    const Facet& facet = facets[f];
-    const Side side = front ? facet.front : facet.back;
-    const Side other = front ? facet.back : facet.front;
-    return complex.side_is_material(side) && (facet.covered() || !complex.side_is_material(other));
-  };
-  const auto face_side_has_polygon = [&](Index face, std::size_t i) {
-    if (complex.first_facet_on_face(face) >= 0) return false;
-    const auto around = adj.tets_of_face(face);
-    if (i >= around.size() || !complex.tet_material(around[i])) return false;
-    bool exposed = around.size() == 1;
-    for (const Index other : around) exposed = exposed || (other != around[i] && !complex.tet_material(other));
-    return exposed;
-  };
-  const std::size_t num_slots = 2 * num_facets + 2 * static_cast<std::size_t>(num_faces);
-  std::vector<std::int64_t> slot_index(num_slots + 1, 0);
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, num_slots, 1024), [&](const auto& range) {
-    for (std::size_t slot = range.begin(); slot != range.end(); ++slot) {
-      const bool has = slot < 2 * num_facets
-                           ? facet_side_has_polygon(slot / 2, slot % 2 == 1)
-                           : face_side_has_polygon(static_cast<Index>((slot - 2 * num_facets) / 2), slot % 2);
-      slot_index[slot + 1] = has ? 1 : 0;
-    }
-  });
-  for (std::size_t slot = 0; slot < num_slots; ++slot) slot_index[slot + 1] += slot_index[slot];
-  std::vector<Polygon> polygons(static_cast<std::size_t>(slot_index[num_slots]));
-  const auto polygon_at = [&](std::size_t slot) -> Polygon* {
-    return slot_index[slot + 1] > slot_index[slot] ? &polygons[static_cast<std::size_t>(slot_index[slot])] : nullptr;
-  };
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, num_facets, 256), [&](const auto& range) {
-    for (std::size_t f = range.begin(); f != range.end(); ++f) {
-      const Facet& facet = facets[f];
-      for (const bool front : {false, true}) {
-        Polygon* polygon = polygon_at(2 * f + (front ? 1 : 0));
-        if (polygon == nullptr) continue;
-        polygon->copy = copy_on(front ? facet.front : facet.back);
-        polygon->source = facet.covered() ? complex.cut_id(facet)
-                          : facet.mesh_face >= 0 ? face_source(facet.mesh_face)
-                                                 : std::numeric_limits<std::int64_t>::min();
-        // Stored order is outward for the cell behind the facet.
-        triangulate_facet(complex, facet, front, &polygon->triangles);
-        for (const Corner& corner : facet.corners) keys.add_vertex(corner.vertex, polygon->copy, polygon);
-      }
-    }
-  });
-  tbb::parallel_for(tbb::blocked_range<Index>(0, num_faces, 256), [&](const auto& range) {
-    std::vector<VertexId> points;
-    for (Index face = range.begin(); face != range.end(); ++face) {
-      for (std::size_t i = 0; i < 2; ++i) {
-        Polygon* polygon = polygon_at(2 * num_facets + 2 * static_cast<std::size_t>(face) + i);
-        if (polygon == nullptr) continue;
-        // The face's polygon: its nodes in outward order, and the points refined tets around its
-        // edges have put on them.
-        const Index tet = adj.tets_of_face(face)[i];
-        int local = 0;
-        while (adj.tet_faces(tet, local) != face) ++local;
-        polygon->copy = copies.copy_of(tet, 0);
-        polygon->source = face_source(face);
-        std::vector<std::uint8_t> strict;
-        for (int k = 0; k < 3; ++k) {
-          const Index from = tets(tet, kTetFaces[local][k]), to = tets(tet, kTetFaces[local][(k + 1) % 3]);
-          keys.add_node(from, polygon->copy, polygon);
-          strict.push_back(1);
-          Index mesh_edge = -1;
-          for (int e = 0; e < 6; ++e) {
-            const Index a = tets(tet, kTetEdges[e][0]), b = tets(tet, kTetEdges[e][1]);
-            if ((a == from && b == to) || (a == to && b == from)) mesh_edge = adj.tet_edges(tet, e);
-          }
-          points.clear();
-          complex.mesh_edge_points(mesh_edge, from, to, &points);
-          for (const VertexId v : points) {
-            keys.add_vertex(v, polygon->copy, polygon);
-            strict.push_back(0);
-          }
-        }
-        triangulate_convex_polygon(std::move(strict), false, &polygon->triangles);
-      }
-    }
-  });
+// The polygons bounding the material of one input tet's copies, as built.
+struct Patch {
+  std::vector<PatchCorner> corners;
+  std::vector<PatchTriangle> triangles;
+};
 
-  // 2. Vertex ids in polygon order (sequential, so ids are deterministic).
-  std::unordered_map<VertexKey, Index, VertexKeyHash> id_of;
-  struct NewVertex {
-    std::int64_t point;
-    Index copy;
-    std::uint8_t zero_mask;
-  };
-  std::vector<NewVertex> vertices;
-  MaterialSurface result;
-  std::vector<std::array<Index, 3>> triangles;
-  std::vector<Index> ids;
-  for (const Polygon& polygon : polygons) {
-    ids.clear();
-    for (std::size_t c = 0; c < polygon.keys.size(); ++c) {
-      const auto [it, inserted] = id_of.try_emplace(polygon.keys[c], static_cast<Index>(vertices.size()));
-      if (inserted) vertices.push_back({polygon.points[c], polygon.copy, polygon.zero_mask[c]});
-      ids.push_back(it->second);
+// Where a tet's patch lies in the arenas.
+struct PatchRange {
+  std::size_t corner_begin = 0, triangle_begin = 0;
+  std::uint32_t corners = 0, triangles = 0;
+};
+
+struct SurfacePatches::State {
+  explicit State(const TetMesh& m)
+      : mesh(m), ranges(static_cast<std::size_t>(m.num_tets())), marked(static_cast<std::size_t>(m.num_tets()), 1) {
+    out_of_date.resize(static_cast<std::size_t>(m.num_tets()));
+    for (Index t = 0; t < m.num_tets(); ++t) out_of_date[t] = t;
+  }
+
+  void mark(Index tet) {
+    if (marked[tet]) return;
+    marked[tet] = 1;
+    out_of_date.push_back(tet);
+  }
+
+  // Tets around each node (CSR), built on first use: only progressive updates need it.
+  void build_node_tets() {
+    if (!node_tets_begin.empty()) return;
+    const Tets& tets = mesh.tets();
+    node_tets_begin.assign(static_cast<std::size_t>(mesh.num_nodes()) + 1, 0);
+    for (Index t = 0; t < mesh.num_tets(); ++t) {
+      for (int k = 0; k < 4; ++k) ++node_tets_begin[tets(t, k) + 1];
     }
-    for (const auto& t : polygon.triangles) {
-      triangles.push_back({ids[t[0]], ids[t[1]], ids[t[2]]});
-      result.triangle_source.push_back(polygon.source);
-      result.triangle_tet.push_back(polygon.copy);
+    for (Index n = 0; n < mesh.num_nodes(); ++n) node_tets_begin[n + 1] += node_tets_begin[n];
+    node_tets.resize(static_cast<std::size_t>(node_tets_begin.back()));
+    std::vector<Index> fill(node_tets_begin.begin(), node_tets_begin.end() - 1);
+    for (Index t = 0; t < mesh.num_tets(); ++t) {
+      for (int k = 0; k < 4; ++k) node_tets[fill[tets(t, k)]++] = t;
     }
   }
 
-  polygons = {};
+  const TetMesh& mesh;
+  // Patches live in two arenas, so that numbering reads them nearly in order: a rebuilt patch is
+  // appended and its old place becomes garbage; when garbage outgrows the live part, the arenas
+  // are rewritten in tet order. Amortised O(size of the rebuilt patches).
+  std::vector<PatchRange> ranges;  // per input tet
+  std::vector<PatchCorner> corner_arena;
+  std::vector<PatchTriangle> triangle_arena;
+  std::size_t live_corners = 0, live_triangles = 0;
+  std::vector<Index> non_empty;  // tets with a non-empty patch, ascending
+  std::vector<Patch> built;      // patches being rebuilt, kept to reuse their memory
+  std::vector<std::uint8_t> marked;              // per tet: out of date
+  std::vector<Index> out_of_date;
+  std::vector<Index> node_tets_begin, node_tets;
+  VertexIds ids;  // kept to reuse its table
+};
+
+SurfacePatches::SurfacePatches(const TetMesh& mesh) : state_(std::make_unique<State>(mesh)) {}
+SurfacePatches::~SurfacePatches() = default;
+SurfacePatches::SurfacePatches(SurfacePatches&&) noexcept = default;
+SurfacePatches& SurfacePatches::operator=(SurfacePatches&&) noexcept = default;
+
+void SurfacePatches::mark(std::span<const Index> tets) {
+  for (const Index t : tets) state_->mark(t);
+}
+
+void SurfacePatches::mark_around(std::span<const Index> tets) {
+  State& s = *state_;
+  s.build_node_tets();
+  const Tets& mesh_tets = s.mesh.tets();
+  for (const Index t : tets) {
+    s.mark(t);
+    for (int k = 0; k < 4; ++k) {
+      const Index node = mesh_tets(t, k);
+      for (Index i = s.node_tets_begin[node]; i < s.node_tets_begin[node + 1]; ++i) {
+        const Index other = s.node_tets[i];
+        int shared = 0;
+        for (int a = 0; a < 4; ++a) {
+          for (int b = 0; b < 4; ++b) shared += mesh_tets(t, a) == mesh_tets(other, b);
+        }
+        if (shared >= 2) s.mark(other);
+      }
+    }
+  }
+}
+
+namespace {
+
+// Builds the patch of one tet: for a refined tet, the material sides of its cells' facets; for an
+// unrefined one, its faces (whole, or as the facets refined neighbours put on them).
+void build_patch(const CellComplex& complex, const connectivity::TetCopies& copies, const Keys& keys, Index tet,
+                 Patch* patch) {
+  const TetAdjacency& adj = complex.mesh().adjacency();
+  const Tets& tets = complex.mesh().tets();
+  const auto& facets = complex.facets();
+  const auto add_triangles = [&](const std::vector<std::array<int, 3>>& triangles, std::size_t base, Index copy,
+                                 std::int64_t source) {
+    for (const auto& t : triangles) {
+      patch->triangles.push_back({{static_cast<std::int32_t>(base + static_cast<std::size_t>(t[0])),
+                                   static_cast<std::int32_t>(base + static_cast<std::size_t>(t[1])),
+                                   static_cast<std::int32_t>(base + static_cast<std::size_t>(t[2]))},
+                                  copy,
+                                  source});
+    }
+  };
+  std::vector<std::array<int, 3>> triangles;
+  // The side of facet f facing `side` (front when `front`): a polygon when that side holds
+  // material and the facet is covered or has no material on its other side.
+  const auto emit_facet_side = [&](cells::FacetId f, bool front) {
+    const Facet& facet = facets[f];
+    const Side side = front ? facet.front : facet.back;
+    const Side other = front ? facet.back : facet.front;
+    if (!complex.side_is_material(side) || (!facet.covered() && complex.side_is_material(other))) return;
+    const Index copy = copies.copy_on(complex, side);
+    const std::int64_t source = facet.covered() ? complex.cut_id(facet)
+                                : facet.mesh_face >= 0 ? face_source(facet.mesh_face)
+                                                       : std::numeric_limits<std::int64_t>::min();
+    triangles.clear();
+    // Stored order is outward for the cell behind the facet.
+    triangulate_facet(complex, facet, front, &triangles);
+    const std::size_t base = patch->corners.size();
+    for (const Corner& corner : facet.corners) keys.add_vertex(corner.vertex, copy, &patch->corners);
+    add_triangles(triangles, base, copy, source);
+  };
+
+  if (complex.refined(tet)) {
+    for (cells::CellId c = complex.first_cell(tet); c >= 0; c = complex.cells()[c].next_in_tet) {
+      for (const cells::FacetId f : complex.cells()[c].facets) emit_facet_side(f, facets[f].front == c);
+    }
+    return;
+  }
+  if (!complex.tet_material(tet)) return;
+  std::vector<VertexId> points;
+  std::vector<std::uint8_t> strict;
+  for (int local = 0; local < 4; ++local) {
+    const Index face = adj.tet_faces(tet, local);
+    if (complex.first_facet_on_face(face) >= 0) {
+      // A refined neighbour has split the face: its facets, on this tet's side.
+      for (cells::FacetId f = complex.first_facet_on_face(face); f >= 0; f = facets[f].next_on_mesh_face) {
+        for (const bool front : {false, true}) {
+          if ((front ? facets[f].front : facets[f].back) == cells::unrefined_side(tet)) emit_facet_side(f, front);
+        }
+      }
+      continue;
+    }
+    // The whole face, when nothing holds material across it.
+    const auto around = adj.tets_of_face(face);
+    bool exposed = around.size() == 1;
+    for (const Index other : around) exposed = exposed || (other != tet && !complex.tet_material(other));
+    if (!exposed) continue;
+    // Its nodes in outward order, and the points refined tets around its edges have put on them.
+    const Index copy = copies.copy_of(tet, 0);
+    const std::size_t base = patch->corners.size();
+    strict.clear();
+    for (int k = 0; k < 3; ++k) {
+      const Index from = tets(tet, kTetFaces[local][k]), to = tets(tet, kTetFaces[local][(k + 1) % 3]);
+      keys.add_node(from, copy, &patch->corners);
+      strict.push_back(1);
+      Index mesh_edge = -1;
+      for (int e = 0; e < 6; ++e) {
+        const Index a = tets(tet, kTetEdges[e][0]), b = tets(tet, kTetEdges[e][1]);
+        if ((a == from && b == to) || (a == to && b == from)) mesh_edge = adj.tet_edges(tet, e);
+      }
+      points.clear();
+      complex.mesh_edge_points(mesh_edge, from, to, &points);
+      for (const VertexId v : points) {
+        keys.add_vertex(v, copy, &patch->corners);
+        strict.push_back(0);
+      }
+    }
+    triangles.clear();
+    triangulate_convex_polygon(strict, false, &triangles);
+    add_triangles(triangles, base, copy, face_source(face));
+  }
+}
+
+}  // namespace
+
+MaterialSurface SurfacePatches::assemble(const CellComplex& complex, const connectivity::TetCopies& copies) {
+  State& s = *state_;
+  const TetMesh& mesh = complex.mesh();
+  const registry::IntersectionRegistry& reg = complex.registry();
+  reg.update_positions();
+  const Keys keys(complex, copies);
+
+  // 1. Rebuild the out-of-date patches: in parallel, a chunk at a time (bounding the memory of
+  //    patches in flight when every tet is out of date), then appended to the arenas in order.
+  std::vector<Index>& rebuilt = s.out_of_date;
+  std::sort(rebuilt.begin(), rebuilt.end());
+  constexpr std::size_t kChunk = 8192;
+  std::vector<Patch>& built = s.built;
+  if (built.size() < std::min(kChunk, rebuilt.size())) built.resize(std::min(kChunk, rebuilt.size()));
+  for (std::size_t first = 0; first < rebuilt.size(); first += kChunk) {
+    const std::size_t count = std::min(kChunk, rebuilt.size() - first);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 64), [&](const auto& range) {
+      for (std::size_t i = range.begin(); i != range.end(); ++i) {
+        built[i].corners.clear();
+        built[i].triangles.clear();
+        build_patch(complex, copies, keys, rebuilt[first + i], &built[i]);
+      }
+    });
+    for (std::size_t i = 0; i < count; ++i) {
+      PatchRange& range = s.ranges[rebuilt[first + i]];
+      s.live_corners -= range.corners;
+      s.live_triangles -= range.triangles;
+      range = PatchRange{s.corner_arena.size(), s.triangle_arena.size(), static_cast<std::uint32_t>(built[i].corners.size()),
+                         static_cast<std::uint32_t>(built[i].triangles.size())};
+      s.corner_arena.insert(s.corner_arena.end(), built[i].corners.begin(), built[i].corners.end());
+      s.triangle_arena.insert(s.triangle_arena.end(), built[i].triangles.begin(), built[i].triangles.end());
+      s.live_corners += range.corners;
+      s.live_triangles += range.triangles;
+    }
+  }
+  std::vector<Index> non_empty;
+  non_empty.reserve(s.non_empty.size() + rebuilt.size());
+  const auto keep_if_non_empty = [&](Index tet) {
+    if (s.ranges[tet].triangles > 0) non_empty.push_back(tet);
+  };
+  std::size_t r = 0;
+  for (const Index tet : s.non_empty) {
+    for (; r < rebuilt.size() && rebuilt[r] < tet; ++r) keep_if_non_empty(rebuilt[r]);
+    if (r < rebuilt.size() && rebuilt[r] == tet) ++r;
+    keep_if_non_empty(tet);
+  }
+  for (; r < rebuilt.size(); ++r) keep_if_non_empty(rebuilt[r]);
+  s.non_empty = std::move(non_empty);
+  for (const Index tet : rebuilt) s.marked[tet] = 0;
+  rebuilt.clear();
+  if (s.corner_arena.size() > 2 * s.live_corners + 4096) {
+    std::vector<PatchCorner> corners;
+    std::vector<PatchTriangle> triangles;
+    corners.reserve(s.live_corners);
+    triangles.reserve(s.live_triangles);
+    for (const Index tet : s.non_empty) {
+      PatchRange& range = s.ranges[tet];
+      const auto c = s.corner_arena.begin() + static_cast<std::ptrdiff_t>(range.corner_begin);
+      const auto t = s.triangle_arena.begin() + static_cast<std::ptrdiff_t>(range.triangle_begin);
+      range.corner_begin = corners.size();
+      range.triangle_begin = triangles.size();
+      corners.insert(corners.end(), c, c + range.corners);
+      triangles.insert(triangles.end(), t, t + range.triangles);
+    }
+    s.corner_arena = std::move(corners);
+    s.triangle_arena = std::move(triangles);
+  }
+
+  // 2. Vertex ids in order of first use over the patches in tet order (sequential, so ids are
+  //    deterministic).
+  MaterialSurface result;
+  result.triangle_source.resize(s.live_triangles);
+  result.triangle_tet.resize(s.live_triangles);
+  result.surface.triangles.resize(static_cast<Index>(s.live_triangles), 3);
+  s.ids.reset(s.live_corners);
+  std::vector<const PatchCorner*> vertices;
+  std::vector<Index> ids;
+  Index row = 0;
+  for (const Index tet : s.non_empty) {
+    const PatchRange& range = s.ranges[tet];
+    const PatchCorner* corners = s.corner_arena.data() + range.corner_begin;
+    ids.resize(range.corners);
+    for (std::uint32_t c = 0; c < range.corners; ++c) {
+      bool inserted;
+      ids[c] = s.ids.find_or_insert(corners[c].key, static_cast<Index>(vertices.size()), &inserted);
+      if (inserted) vertices.push_back(&corners[c]);
+    }
+    const PatchTriangle* triangles = s.triangle_arena.data() + range.triangle_begin;
+    for (std::uint32_t t = 0; t < range.triangles; ++t, ++row) {
+      for (int k = 0; k < 3; ++k) result.surface.triangles(row, k) = ids[static_cast<std::size_t>(triangles[t].corners[k])];
+      result.triangle_source[static_cast<std::size_t>(row)] = triangles[t].source;
+      result.triangle_tet[static_cast<std::size_t>(row)] = triangles[t].copy;
+    }
+  }
 
   // 3. Positions and embedding weights, in parallel.
   const Index n = static_cast<Index>(vertices.size());
@@ -306,20 +496,21 @@ MaterialSurface extract_material_surface(const CellComplex& complex, const conne
   result.vertex_tet.resize(static_cast<std::size_t>(n));
   tbb::parallel_for(tbb::blocked_range<Index>(0, n, 1024), [&](const auto& range) {
     for (Index v = range.begin(); v != range.end(); ++v) {
-      const NewVertex& vertex = vertices[v];
-      const Vec3 p = vertex.point < mesh.num_nodes()
-                         ? Vec3(mesh.rest().row(static_cast<Index>(vertex.point)).transpose())
-                         : reg.position(static_cast<VertexId>(vertex.point - mesh.num_nodes()));
+      const PatchCorner& corner = *vertices[v];
+      const std::int64_t point = corner.key.point;
+      const Vec3 p = point < mesh.num_nodes() ? Vec3(mesh.rest().row(static_cast<Index>(point)).transpose())
+                                               : reg.position(static_cast<VertexId>(point - mesh.num_nodes()));
       result.surface.vertices.row(v) = p.transpose();
-      result.vertex_weights.row(v) = barycentric(mesh, copies.copy_tet()[vertex.copy], p, vertex.zero_mask).transpose();
-      result.vertex_tet[v] = vertex.copy;
+      result.vertex_weights.row(v) = barycentric(mesh, copies.copy_tet()[corner.copy], p, corner.zero_mask).transpose();
+      result.vertex_tet[v] = corner.copy;
     }
   });
-  result.surface.triangles.resize(static_cast<Index>(triangles.size()), 3);
-  for (std::size_t i = 0; i < triangles.size(); ++i) {
-    for (int k = 0; k < 3; ++k) result.surface.triangles(static_cast<Index>(i), k) = triangles[i][k];
-  }
   return result;
+}
+
+MaterialSurface extract_material_surface(const CellComplex& complex, const connectivity::TetCopies& copies) {
+  SurfacePatches patches(complex.mesh());
+  return patches.assemble(complex, copies);
 }
 
 }  // namespace tetcut::surface
