@@ -613,18 +613,7 @@ PreparedTriangle CellComplex::prepare(const CutTriangle& triangle) {
   t.corners_are_inputs = true;
   t.corners = {triangle.a, triangle.b, triangle.c};
   t.plane = registry_->triangle_plane(triangle.a, triangle.b, triangle.c);
-  // Walls along the axis on which the normal is largest (chosen on rounded values; any axis with a
-  // non-zero component works, and that is checked exactly).
-  const Plane& cut_plane = registry_->plane(t.plane.id);
-  int axis = 0;
-  for (int k = 1; k < 3; ++k) {
-    if (std::abs(cut_plane.approx()[k].value) > std::abs(cut_plane.approx()[axis].value)) axis = k;
-  }
-  if (geometry::normal_component_sign(cut_plane, axis) == 0) {
-    for (int k = 0; k < 3; ++k) {
-      if (geometry::normal_component_sign(cut_plane, k) != 0) axis = k;
-    }
-  }
+  const int axis = geometry::wall_axis(registry_->plane(t.plane.id));
   for (int e = 0; e < 3; ++e) {
     t.walls[e] = registry_->wall(t.corners[e], t.corners[(e + 1) % 3], axis, t.corners[(e + 2) % 3]);
   }

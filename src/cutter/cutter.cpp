@@ -54,21 +54,6 @@ spatial::Aabb box_of(const std::array<Vec3, 3>& corners) {
   return box;
 }
 
-// The axis on which a plane's normal is largest (chosen on rounded values, checked non-zero
-// exactly): walls along it are never parallel to the plane.
-int wall_axis(const geometry::Plane& plane) {
-  int axis = 0;
-  for (int k = 1; k < 3; ++k) {
-    if (std::abs(plane.approx()[k].value) > std::abs(plane.approx()[axis].value)) axis = k;
-  }
-  if (geometry::normal_component_sign(plane, axis) == 0) {
-    for (int k = 0; k < 3; ++k) {
-      if (geometry::normal_component_sign(plane, k) != 0) axis = k;
-    }
-  }
-  return axis;
-}
-
 // The distinct planes of the cuts so far. Triangles on one plane (a straight blade sweeps a flat
 // strip, batch after batch) share one plane, and in world space one pulled-back plane per copy, so
 // that what one triangle leaves on the plane the next recognises by plane id instead of by exact
@@ -270,7 +255,7 @@ CutBatchReport Cutter::cut(const TriangleSurface& batch) {
     t.corners = corners;
     const PlaneBook::Found plane = s.planes.triangle_plane(geometry::Plane::through(corners[0], corners[1], corners[2]), 4 * std::int64_t{id});
     t.plane = {s.planes.per_copy(plane.key, -1, [&] { return s.registry.add_plane(*plane.plane); }), plane.sign};
-    const int axis = wall_axis(*plane.plane);
+    const int axis = geometry::wall_axis(*plane.plane);
     for (int e = 0; e < 3; ++e) {
       // Rest-space walls come from the registry, which keeps one per edge and axis across batches.
       t.walls[e] = s.registry.wall(corners[e], corners[(e + 1) % 3], axis, corners[(e + 2) % 3]);
@@ -386,7 +371,7 @@ CutBatchReport Cutter::cut_deformed(const TriangleSurface& batch) {
     // (shared with earlier triangles of the batch on the same plane or edge).
     const PlaneBook::Found plane = s.planes.triangle_plane(geometry::Plane::through(corners[0], corners[1], corners[2]), 4 * std::int64_t{id});
     const geometry::Plane world = plane.sign > 0 ? *plane.plane : plane.plane->flipped();
-    const int axis = wall_axis(*plane.plane);
+    const int axis = geometry::wall_axis(*plane.plane);
     std::array<PlaneBook::Found, 3> walls;
     std::array<geometry::Plane, 3> world_walls;
     std::array<std::pair<const geometry::Plane*, int>, 3> walls_with_signs;

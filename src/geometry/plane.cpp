@@ -283,6 +283,19 @@ int normal_component_sign(const Plane& plane, int axis) {
   return sgn(exact_plane(plane)[axis]);
 }
 
+int wall_axis(const Plane& plane) {
+  int axis = 0;
+  for (int k = 1; k < 3; ++k) {
+    if (std::abs(plane.approx()[k].value) > std::abs(plane.approx()[axis].value)) axis = k;
+  }
+  if (normal_component_sign(plane, axis) == 0) {
+    for (int k = 0; k < 3; ++k) {
+      if (normal_component_sign(plane, k) != 0) axis = k;
+    }
+  }
+  return axis;
+}
+
 int plane_alignment(const Plane& p, const Plane& q) {
   // The same plane iff the exact forms are proportional: every 2x2 minor vanishes.
   const ExactPlane ep = exact_plane(p), eq = exact_plane(q);

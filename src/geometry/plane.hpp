@@ -112,6 +112,11 @@ inline int side_of_tpi(const Plane& a, const Plane& b, const Plane& c, int orien
 /// Sign of component `axis` of the plane's normal. Exact.
 int normal_component_sign(const Plane& plane, int axis);
 
+/// The axis along which a triangle's walls (virtual triangles) are built: the one on which the
+/// plane's normal is largest, chosen on rounded values, and checked non-zero exactly, so walls
+/// along it are never parallel to the plane. The plane must not be degenerate.
+int wall_axis(const Plane& plane);
+
 /// True when p and q are the same set of points (either orientation). Exact.
 bool same_plane(const Plane& p, const Plane& q);
 /// +1 when same_plane and the normals point the same way, -1 when opposite, 0 when not the same plane.
