@@ -292,6 +292,7 @@ void SurfacePatches::mark_around(std::span<const Index> tets) {
       const Index node = mesh_tets(t, k);
       for (Index i = s.node_tets_begin[node]; i < s.node_tets_begin[node + 1]; ++i) {
         const Index other = s.node_tets[i];
+        if (s.marked[other]) continue;
         int shared = 0;
         for (int a = 0; a < 4; ++a) {
           for (int b = 0; b < 4; ++b) shared += mesh_tets(t, a) == mesh_tets(other, b);
