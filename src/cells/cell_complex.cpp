@@ -467,6 +467,8 @@ CellId CellComplex::split(CellId cell, PlaneId plane, FacetId* section) {
     part.next_in_tet = cells_[cell].next_in_tet;
     cells_.push_back(std::move(part));
     cells_[cell].next_in_tet = negative_cell;
+    cells_[cell].box_min = {1, 1, 1};  // the positive part is smaller now: recompute when asked
+    cells_[cell].box_max = {0, 0, 0};
   }
   touch(cells_[cell].tet);
 
@@ -620,12 +622,51 @@ PreparedTriangle CellComplex::prepare(const CutTriangle& triangle) {
   return t;
 }
 
+bool CellComplex::cell_misses_triangle_box(CellId cell) {
+  Cell& c = cells_[cell];
+  if (c.box_min[0] > c.box_max[0]) {
+    // Rounded corners are within kCoordinateTolerance of the largest coordinate of each point
+    // (certified: see geometry::tpi_coordinates), and float rounding goes outward.
+    std::array<double, 3> lo{}, hi{};
+    lo.fill(std::numeric_limits<double>::infinity());
+    hi.fill(-std::numeric_limits<double>::infinity());
+    double largest = 0;
+    for (const FacetId f : c.facets) {
+      for (const Corner& corner : facets_[f].corners) {
+        const Vec3& x = registry_->position(corner.vertex);
+        for (int k = 0; k < 3; ++k) {
+          lo[k] = std::min(lo[k], x[k]);
+          hi[k] = std::max(hi[k], x[k]);
+        }
+        largest = std::max(largest, x.cwiseAbs().maxCoeff());
+      }
+    }
+    const double margin = 2 * geometry::kCoordinateTolerance * largest;
+    constexpr float kInf = std::numeric_limits<float>::infinity();
+    for (int k = 0; k < 3; ++k) {
+      c.box_min[k] = std::nextafter(static_cast<float>(lo[k] - margin), -kInf);
+      c.box_max[k] = std::nextafter(static_cast<float>(hi[k] + margin), kInf);
+    }
+  }
+  for (int k = 0; k < 3; ++k) {
+    if (c.box_max[k] < insertion_.box_min[k] || c.box_min[k] > insertion_.box_max[k]) return true;
+  }
+  return false;
+}
+
 void CellComplex::insert_triangle(const PreparedTriangle& triangle, std::span<const Index> tets, std::int32_t label,
                                   std::vector<Index>* touched) {
   insertion_ = Insertion{};
   insertion_.stamp = static_cast<std::int32_t>(inserted_.size());
   insertion_.triangle = &triangle;
   insertion_.touched = touched;
+  if (triangle.corners_are_inputs) {
+    insertion_.has_box = true;
+    for (int k = 0; k < 3; ++k) {
+      insertion_.box_min[k] = std::min({triangle.corners[0][k], triangle.corners[1][k], triangle.corners[2][k]});
+      insertion_.box_max[k] = std::max({triangle.corners[0][k], triangle.corners[1][k], triangle.corners[2][k]});
+    }
+  }
   inserted_.push_back({triangle.plane, triangle.walls, triangle.cut_id});
   registry_->begin_memo({triangle.plane.id, triangle.walls[0].id, triangle.walls[1].id, triangle.walls[2].id});
   std::vector<CellId> cells;
@@ -638,7 +679,9 @@ void CellComplex::insert_triangle(const PreparedTriangle& triangle, std::span<co
     cells.clear();
     for (CellId c = first_cell_[tet]; c >= 0; c = cells_[c].next_in_tet) cells.push_back(c);
     for (const CellId c : cells) {
-      if (cells_[c].material && (label < 0 || cells_[c].label == label)) process_cell(c);
+      if (!cells_[c].material || (label >= 0 && cells_[c].label != label)) continue;
+      if (insertion_.has_box && cell_misses_triangle_box(c)) continue;
+      process_cell(c);
     }
   }
   registry_->end_memo();

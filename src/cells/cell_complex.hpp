@@ -95,6 +95,9 @@ struct Cell {
   /// whose material the cell is, so that a cut placed on a deformed copy goes into its cells only.
   std::int32_t label = -1;
   std::vector<FacetId> facets;
+  /// A box certainly holding the cell (rounded corners widened by their error bound, rounded
+  /// outward to float), or empty (min > max) until computed; split() clears both parts'.
+  std::array<float, 3> box_min{1, 1, 1}, box_max{0, 0, 0};
 };
 
 /// A cut triangle in rest space, with its id in the caller's numbering.
@@ -272,10 +275,18 @@ class CellComplex {
   std::vector<std::int32_t> tet_label_;    // per tet, for unrefined tets
 
   // The insertion in progress; its stamp is its index in inserted_.
+  /// Whether the cell certainly misses the box of the triangle being inserted (rest-space
+  /// triangles, whose corners are inputs): a sound filter before the exact tests, as the cell's box
+  /// holds its exact corners. Most cells of a tet crossed by many small triangles (an embedded
+  /// scan) are far from each one.
+  bool cell_misses_triangle_box(CellId cell);
+
   struct Insertion {
     std::int32_t stamp = -1;
     const PreparedTriangle* triangle = nullptr;
     std::vector<Index>* touched = nullptr;
+    bool has_box = false;
+    std::array<double, 3> box_min{}, box_max{};
   };
   Insertion insertion_;
   // Every insertion's plane, walls and cut id: facets name the insertion that covered them, and

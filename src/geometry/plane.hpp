@@ -144,7 +144,9 @@ int side_of_point(const Plane& q, const Vec3& x, const Homogeneous& h);
 
 /// Largest error of a rounded coordinate from tpi_coordinates, relative to the point's largest
 /// coordinate: 2^-40 (about 1e-12), far below anything a viewer or a simulation resolves. Beyond it
-/// the exact evaluation is used. Output geometry only; no decision depends on it.
+/// the exact evaluation is used. No exact decision depends on it; the one other use is the cell
+/// box filter (CellComplex), which widens rounded corners by twice this bound so that a box that
+/// misses a triangle certainly does (the first-order bound and final roundings fit in the factor 2).
 inline constexpr double kCoordinateTolerance = 0x1p-40;
 
 /// Coordinates of the point where a, b and c meet, correctly rounded or nearly so: from the
