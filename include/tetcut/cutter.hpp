@@ -23,13 +23,19 @@
 
 namespace tetcut {
 
+struct EmbedOptions;
+struct EmbedReport;
+class Cutter;
+Cutter embed(TetMesh mesh, const TriangleSurface& surface, const EmbedOptions& options, EmbedReport* report);
+
 /// The simulation mesh after cutting. Each material component of an input tet has its own copy
 /// of the tet, with the tet's rest positions, so no element is smaller or worse shaped than an
 /// input element. Copies whose shared face holds common material share that face's nodes.
 struct CutMesh {
-  /// Nodes and tet copies. Input node n keeps id n; duplicated nodes follow. Each input tet's first
-  /// copy comes first, in input order (so, when every tet holds material, tet t's first copy is
-  /// t); further copies follow.
+  /// Nodes and tet copies. For a Cutter made from a mesh, input node n keeps id n and duplicated
+  /// nodes follow; each input tet's first copy comes first, in input order (so tet t's first copy
+  /// is t), and further copies follow. For an embedding, ids start dense over the kept material
+  /// (see node_parent and tet_parent); copies made by later cuts follow.
   TetMesh mesh;
   std::vector<Index> node_parent;           ///< per node: the input node it copies
   std::vector<Index> tet_parent;            ///< per copy: the input tet it copies
@@ -154,6 +160,7 @@ class Cutter {
   std::int64_t num_cut_triangles() const;
 
  private:
+  friend Cutter embed(TetMesh mesh, const TriangleSurface& surface, const EmbedOptions& options, EmbedReport* report);
   struct State;
   std::unique_ptr<State> state_;
 };

@@ -2,6 +2,7 @@
 // The inputs of the paper's figures, so that examples, benchmarks, tests and the demo all cut the
 // same thing.
 
+#include <tetcut/generators.hpp>
 #include <tetcut/surface.hpp>
 #include <tetcut/tet_mesh.hpp>
 
@@ -31,6 +32,9 @@ TriangleSurface axis_square(int axis, double value, double lo, double hi);
 /// A closed, outward-oriented icosphere: the icosahedron with each triangle split into four
 /// `subdivisions` times (20 * 4^subdivisions triangles), vertices pushed onto the sphere.
 TriangleSurface icosphere(const Vec3& centre, double radius, int subdivisions);
+
+/// The closed, outward-oriented boundary of a box: 8 vertices, 12 triangles.
+TriangleSurface box_surface(const Box& box);
 
 /// Concatenates soups.
 TriangleSurface concatenate(const TriangleSurface& a, const TriangleSurface& b);

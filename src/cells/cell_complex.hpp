@@ -166,6 +166,9 @@ class CellComplex {
   void set_cell_material(CellId cell, bool material) { cells_[cell].material = material; }
   /// Whether an unrefined tet holds material.
   bool tet_material(Index tet) const { return tet_material_[tet] != 0; }
+  /// Lets material pass through a covered facet again (embedding joins the overlapping insides
+  /// of a self-intersecting surface); its winding jump stays.
+  void uncover(FacetId facet) { facets_[facet].covering = -1; }
 
   bool refined(Index tet) const { return first_cell_[tet] >= 0; }
   /// First cell of a refined tet (then follow Cell::next_in_tet), or -1.

@@ -90,6 +90,7 @@ Index TetCopies::copy_of(Index tet, std::int32_t component) const {
 std::span<const Index> TetCopies::copies_of(Index tet) const {
   const auto it = several_copies_.find(tet);
   if (it != several_copies_.end()) return it->second;
+  if (single_copy_[tet] < 0) return {};
   return {&single_copy_[tet], 1};
 }
 
@@ -97,6 +98,61 @@ Index TetCopies::copy_on(const CellComplex& complex, Side s) const {
   if (cells::is_cell(s)) return complex.cells()[s].label;
   if (cells::is_unrefined(s)) return single_copy_[cells::unrefined_tet(s)];
   return -1;
+}
+
+void TetCopies::rebuild(CellComplex& complex, const components::MaterialComponents& components) {
+  const Index num_tets = mesh_->num_tets();
+  const Tets& tets = mesh_->tets();
+  copy_tet_.clear();
+  copy_nodes_.clear();
+  node_parent_.clear();
+  several_copies_.clear();
+  single_copy_.assign(static_cast<std::size_t>(num_tets), -1);
+  for (Index t = 0; t < num_tets; ++t) {
+    const std::int32_t count = components.count[t];
+    if (count == 0) continue;
+    const Index first = num_copies();
+    for (std::int32_t k = 0; k < count; ++k) {
+      copy_tet_.push_back(t);
+      copy_nodes_.push_back({-1, -1, -1, -1});
+    }
+    single_copy_[t] = first;
+    if (count > 1) {
+      std::vector<Index> ids(static_cast<std::size_t>(count));
+      std::iota(ids.begin(), ids.end(), first);
+      several_copies_[t] = std::move(ids);
+    }
+    if (!complex.refined(t)) {
+      complex.set_tet_label(t, first);
+      continue;
+    }
+    for (cells::CellId c = complex.first_cell(t); c >= 0; c = complex.cells()[c].next_in_tet) {
+      const std::int32_t k = components.cell_component[c];
+      if (k >= 0) complex.set_cell_label(c, first + k);
+    }
+  }
+  // Node slots (copy, local corner) joined across the faces that join copies.
+  UnionFind slots(4 * copy_tet_.size());
+  const TetAdjacency& adjacency = mesh_->adjacency();
+  for (Index face = 0; face < adjacency.num_faces(); ++face) {
+    joins_across(complex, *this, face, [&](Index a, Index b) {
+      for (int k = 0; k < 3; ++k) {
+        const Index node = adjacency.faces(face, k);
+        slots.join(4 * a + local_index(tets, copy_tet_[a], node), 4 * b + local_index(tets, copy_tet_[b], node));
+      }
+    });
+  }
+  std::vector<Index> id_of_root(4 * copy_tet_.size(), -1);
+  for (Index c = 0; c < num_copies(); ++c) {
+    for (int k = 0; k < 4; ++k) {
+      Index& id = id_of_root[slots.find(4 * c + k)];
+      if (id < 0) {
+        id = num_nodes();
+        node_parent_.push_back(tets(copy_tet_[c], k));
+      }
+      copy_nodes_[c][k] = id;
+    }
+  }
 }
 
 TetCopies::Update TetCopies::update(CellComplex& complex, const components::MaterialComponents& components,
@@ -138,7 +194,7 @@ TetCopies::Update TetCopies::update(CellComplex& complex, const components::Mate
       const std::int32_t k = components.cell_component[c];
       if (k >= 0) complex.set_cell_label(c, static_cast<std::int32_t>(copy_of_component[k]));
     }
-    single_copy_[tet] = copy_of_component.front();
+    single_copy_[tet] = copy_of_component.empty() ? -1 : copy_of_component.front();
     if (count > 1) {
       several_copies_[tet] = std::move(copy_of_component);
     } else {

@@ -28,6 +28,12 @@ class TetCopies {
   /// labelled with it. No tet of `complex` may be refined yet.
   TetCopies(const TetMesh& mesh, cells::CellComplex& complex);
 
+  /// Replaces every copy and node: one copy per material component of every tet (none for a tet
+  /// without material), numbered densely in tet order, and one node per class of node slots joined
+  /// across faces, numbered in order of first use by the copies; labels the cells. For an
+  /// embedding, after material was removed. O(T + refined cells + faces).
+  void rebuild(cells::CellComplex& complex, const components::MaterialComponents& components);
+
   /// What a batch changed, for a simulator to carry its state over.
   struct Update {
     /// Nodes from this id on are new; new_node_source[i] is the node (an id from before the
@@ -58,7 +64,7 @@ class TetCopies {
   Index copy_of(Index tet, std::int32_t component) const;
   /// The copy on side `s` of a facet (a cell, or an unrefined tet); -1 for the outside.
   Index copy_on(const cells::CellComplex& complex, cells::Side s) const;
-  /// Copies of a tet, by component.
+  /// Copies of a tet, by component (none when it holds no material).
   std::span<const Index> copies_of(Index tet) const;
 
  private:
@@ -69,7 +75,7 @@ class TetCopies {
   std::vector<std::array<Index, 4>> copy_nodes_;
   std::vector<Index> node_parent_;
   // Copies by component: a tet with one copy keeps it in single_copy_; a tet with more has them
-  // all in several_copies_.
+  // all in several_copies_; a tet with none has -1.
   std::vector<Index> single_copy_;
   std::unordered_map<Index, std::vector<Index>> several_copies_;
   // Tets around each input node (CSR), fixed.

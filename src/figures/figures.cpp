@@ -97,6 +97,23 @@ TriangleSurface icosphere(const Vec3& centre, double radius, int subdivisions) {
   return s;
 }
 
+TriangleSurface box_surface(const Box& box) {
+  TriangleSurface s;
+  s.vertices.resize(8, 3);
+  for (Index v = 0; v < 8; ++v) {
+    for (int k = 0; k < 3; ++k) s.vertices(v, k) = ((v >> k) & 1) != 0 ? box.max[k] : box.min[k];
+  }
+  // Corner v has bit k set when it is at max along axis k; each face as two triangles, outward.
+  s.triangles.resize(12, 3);
+  s.triangles << 0, 2, 1, 1, 2, 3,  // z = min
+      4, 5, 6, 5, 7, 6,             // z = max
+      0, 1, 4, 1, 5, 4,             // y = min
+      2, 6, 3, 3, 6, 7,             // y = max
+      0, 4, 2, 2, 4, 6,             // x = min
+      1, 3, 5, 3, 7, 5;             // x = max
+  return s;
+}
+
 TriangleSurface concatenate(const TriangleSurface& a, const TriangleSurface& b) {
   TriangleSurface s;
   s.vertices.resize(a.num_vertices() + b.num_vertices(), 3);

@@ -45,6 +45,10 @@ TriangleSurface soup(const std::vector<Triangle>& triangles) {
 }
 
 std::string check_cut_invariants(const TetMesh& input, const CutResult& result) {
+  return check_cut_invariants(input, result, input_volume(input));
+}
+
+std::string check_cut_invariants(const TetMesh& input, const CutResult& result, double volume) {
   const CutMesh& cut = result.mesh;
   const Index copies = cut.mesh.num_tets();
   if (static_cast<Index>(cut.tet_parent.size()) != copies || static_cast<Index>(cut.tet_piece.size()) != copies ||
@@ -52,7 +56,6 @@ std::string check_cut_invariants(const TetMesh& input, const CutResult& result) 
       static_cast<Index>(cut.node_parent.size()) != cut.mesh.num_nodes()) {
     return "per-copy or per-node arrays have the wrong size";
   }
-  const double volume = input_volume(input);
   double copy_sum = 0;
   for (Index c = 0; c < copies; ++c) {
     if (!(cut.tet_material_volume[c] > 0)) return "copy " + std::to_string(c) + " holds no material";
@@ -67,8 +70,8 @@ std::string check_cut_invariants(const TetMesh& input, const CutResult& result) 
     }
   }
   const double piece_sum = std::accumulate(cut.piece_volumes.begin(), cut.piece_volumes.end(), 0.0);
-  if (!close(piece_sum, volume, 1e-12, volume)) return describe("piece volumes do not add up to the mesh volume", piece_sum, volume);
-  if (!close(copy_sum, volume, 1e-12, volume)) return describe("copy volumes do not add up to the mesh volume", copy_sum, volume);
+  if (!close(piece_sum, volume, 1e-12, volume)) return describe("piece volumes do not add up to the material volume", piece_sum, volume);
+  if (!close(copy_sum, volume, 1e-12, volume)) return describe("copy volumes do not add up to the material volume", copy_sum, volume);
   if (!std::is_sorted(cut.piece_volumes.rbegin(), cut.piece_volumes.rend())) return "pieces are not ordered largest first";
 
   // Pieces against the output mesh: copies sharing a face (the same three nodes) are one piece,

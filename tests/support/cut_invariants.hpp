@@ -24,5 +24,7 @@ TriangleSurface soup(const std::vector<Triangle>& triangles);
 ///    reproduces the vertices' rest positions;
 ///  - every surface triangle lies on a copy of its piece.
 std::string check_cut_invariants(const TetMesh& input, const CutResult& result);
+/// The same when the material's volume is `volume` instead of the whole input's (embedding).
+std::string check_cut_invariants(const TetMesh& input, const CutResult& result, double volume);
 
 }  // namespace tetcut::testing
