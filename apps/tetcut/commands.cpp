@@ -1,6 +1,7 @@
 #include "commands.hpp"
 
 #include <tetcut/cutter.hpp>
+#include <tetcut/embed.hpp>
 #include <tetcut/error.hpp>
 #include <tetcut/figures.hpp>
 #include <tetcut/generators.hpp>
@@ -10,7 +11,10 @@
 #include <fmt/core.h>
 #include <fmt/ranges.h>
 
+#include <sys/resource.h>
+
 #include <chrono>
+#include <cmath>
 #include <optional>
 #include <filesystem>
 #include <nlohmann/json.hpp>
@@ -178,6 +182,95 @@ struct CutOutputs {
   }
 };
 
+// Peak resident memory of this process so far, in bytes (Linux reports kilobytes).
+std::int64_t peak_memory_bytes() {
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  return static_cast<std::int64_t>(usage.ru_maxrss) * 1024;
+}
+
+// What a run reports besides the result itself.
+struct RunSummary {
+  std::string headline;  // the first line printed
+  Json report;           // the report's first keys (inputs)
+  Index triangles = 0, skipped = 0, inverted = 0;
+  bool world_space = false;
+  Json timings;          // stages before the surface; surface and write follow
+  Json extra;            // keys appended to the report
+  bool peak_memory = false;  // report the process's peak resident memory
+};
+
+// Writes the outputs of a cut (or an embedding) of `mesh`, prints a summary and writes the report.
+void write_and_report(const TetMesh& mesh, const CutResult& result, const CutOutputs& outputs, const RunSummary& run) {
+  auto start = Clock::now();
+  if (!outputs.mesh.empty()) {
+    TetMeshWriteOptions options = cut_mesh_write_options(result.mesh, mesh, outputs.mesh_options);
+    options.current_positions = outputs.deformed;
+    write_tet_mesh(outputs.mesh, result.mesh.mesh, options);
+  }
+  if (!outputs.surface.empty()) {
+    TriangleSurface surface = result.surface.surface;
+    if (outputs.deformed) surface.vertices = result.surface.positions(result.mesh, result.mesh.mesh.current());
+    write_surface(outputs.surface, surface, SurfaceWriteOptions{outputs.binary});
+  }
+  const double write_seconds = seconds_since(start);
+  Json timings = run.timings;
+  timings["surface"] = result.seconds_surface;
+  timings["write"] = write_seconds;
+
+  const SurfaceStats surface = measure_surface(result.surface.surface);
+  double volume = 0;
+  for (const double v : result.mesh.piece_volumes) volume += v;
+  fmt::print("{}\n", run.headline);
+  fmt::print("  tets             {} -> {}\n", mesh.num_tets(), result.mesh.mesh.num_tets());
+  fmt::print("  nodes            {} -> {}\n", mesh.num_nodes(), result.mesh.mesh.num_nodes());
+  fmt::print("  pieces           {}\n", result.mesh.num_pieces());
+  fmt::print("  volume           {:.17g}\n", volume);
+  fmt::print("  surface          {} triangles, area {:.17g}, {}\n", result.surface.surface.num_triangles(), surface.area,
+             surface.watertight ? "closed" : "NOT closed");
+  std::string times;
+  for (const auto& [stage, seconds] : timings.items()) {
+    times += fmt::format("{}{} {:.3f} s", times.empty() ? "" : ", ", stage, seconds.get<double>());
+  }
+  fmt::print("  time             {}\n", times);
+  std::int64_t peak = 0;
+  if (run.peak_memory) {
+    peak = peak_memory_bytes();
+    fmt::print("  peak memory      {:.1f} MiB\n", static_cast<double>(peak) / (1 << 20));
+  }
+  for (const fs::path* path : {&outputs.mesh, &outputs.surface, &outputs.report}) {
+    if (!path->empty()) fmt::print("  wrote            {}\n", path->string());
+  }
+
+  if (!outputs.report.empty()) {
+    Json report = run.report;
+    report.update(Json{
+        {"nodes_in", mesh.num_nodes()},
+        {"tets_in", mesh.num_tets()},
+        {"nodes_out", result.mesh.mesh.num_nodes()},
+        {"tets_out", result.mesh.mesh.num_tets()},
+        {"triangles", run.triangles},
+        {"zero_area_triangles_skipped", run.skipped},
+        {"world_space", run.world_space},
+        {"inverted_tets_skipped", run.inverted},
+        {"pieces", result.mesh.num_pieces()},
+        {"piece_volumes", result.mesh.piece_volumes},
+        {"volume", volume},
+        {"surface",
+         {{"triangles", result.surface.surface.num_triangles()},
+          {"vertices", result.surface.surface.num_vertices()},
+          {"area", surface.area},
+          {"closed", surface.watertight},
+          {"manifold", surface.closed},
+          {"enclosed_volume", surface.enclosed_volume}}},
+        {"timings", timings},
+    });
+    if (!run.extra.is_null()) report.update(run.extra);
+    if (run.peak_memory) report["peak_memory_bytes"] = peak;
+    write_text_file(outputs.report, report.dump(2) + "\n");
+  }
+}
+
 // Cuts `mesh` by the batches in order, prints warnings and a summary, and writes the outputs. With
 // `deformed` positions, the batches are placed in world space on that configuration.
 CutResult cut_and_report(const std::string& name, const TetMesh& mesh, const std::vector<NamedBatch>& batches,
@@ -203,70 +296,165 @@ CutResult cut_and_report(const std::string& name, const TetMesh& mesh, const std
   }
   const double insert_seconds = seconds_since(start);
   CutResult result = cutter.result();
-  const double cut_seconds = insert_seconds + result.seconds_mesh;
-
-  start = Clock::now();
-  if (!outputs.mesh.empty()) {
-    TetMeshWriteOptions options = cut_mesh_write_options(result.mesh, mesh, outputs.mesh_options);
-    options.current_positions = outputs.deformed;
-    write_tet_mesh(outputs.mesh, result.mesh.mesh, options);
-  }
-  if (!outputs.surface.empty()) {
-    TriangleSurface surface = result.surface.surface;
-    if (outputs.deformed) surface.vertices = result.surface.positions(result.mesh, result.mesh.mesh.current());
-    write_surface(outputs.surface, surface, SurfaceWriteOptions{outputs.binary});
-  }
-  const double write_seconds = seconds_since(start);
-
-  const SurfaceStats surface = measure_surface(result.surface.surface);
-  double volume = 0;
-  for (const double v : result.mesh.piece_volumes) volume += v;
-  fmt::print("cut {} by {} batch(es): {} triangles{}", name, batches.size(), triangles,
-             deformed != nullptr ? " placed on the deformed mesh" : "");
-  if (skipped > 0) fmt::print(" ({} zero-area, skipped)", skipped);
-  fmt::print("\n");
-  fmt::print("  tets             {} -> {}\n", mesh.num_tets(), result.mesh.mesh.num_tets());
-  fmt::print("  nodes            {} -> {}\n", mesh.num_nodes(), result.mesh.mesh.num_nodes());
-  fmt::print("  pieces           {}\n", result.mesh.num_pieces());
-  fmt::print("  volume           {:.17g}\n", volume);
-  fmt::print("  surface          {} triangles, area {:.17g}, {}\n", result.surface.surface.num_triangles(), surface.area,
-             surface.watertight ? "closed" : "NOT closed");
-  fmt::print("  time             read {:.3f} s, cut {:.3f} s, surface {:.3f} s, write {:.3f} s\n", read_seconds,
-             cut_seconds, result.seconds_surface, write_seconds);
-  for (const fs::path* path : {&outputs.mesh, &outputs.surface, &outputs.report}) {
-    if (!path->empty()) fmt::print("  wrote            {}\n", path->string());
-  }
-
-  if (!outputs.report.empty()) {
-    Json cut_names = Json::array();
-    for (const NamedBatch& batch : batches) cut_names.push_back(batch.name);
-    const Json report{
-        {"mesh", name},
-        {"cuts", cut_names},
-        {"nodes_in", mesh.num_nodes()},
-        {"tets_in", mesh.num_tets()},
-        {"nodes_out", result.mesh.mesh.num_nodes()},
-        {"tets_out", result.mesh.mesh.num_tets()},
-        {"triangles", triangles},
-        {"zero_area_triangles_skipped", skipped},
-        {"world_space", deformed != nullptr},
-        {"inverted_tets_skipped", inverted},
-        {"pieces", result.mesh.num_pieces()},
-        {"piece_volumes", result.mesh.piece_volumes},
-        {"volume", volume},
-        {"surface",
-         {{"triangles", result.surface.surface.num_triangles()},
-          {"vertices", result.surface.surface.num_vertices()},
-          {"area", surface.area},
-          {"closed", surface.watertight},
-          {"manifold", surface.closed},
-          {"enclosed_volume", surface.enclosed_volume}}},
-        {"timings", {{"read", read_seconds}, {"cut", cut_seconds}, {"surface", result.seconds_surface}, {"write", write_seconds}}},
-    };
-    write_text_file(outputs.report, report.dump(2) + "\n");
-  }
+  Json cut_names = Json::array();
+  for (const NamedBatch& batch : batches) cut_names.push_back(batch.name);
+  RunSummary summary;
+  summary.headline = fmt::format("cut {} by {} batch(es): {} triangles{}", name, batches.size(), triangles,
+                                 deformed != nullptr ? " placed on the deformed mesh" : "");
+  if (skipped > 0) summary.headline += fmt::format(" ({} zero-area, skipped)", skipped);
+  summary.report = Json{{"mesh", name}, {"cuts", cut_names}};
+  summary.triangles = triangles;
+  summary.skipped = skipped;
+  summary.inverted = inverted;
+  summary.world_space = deformed != nullptr;
+  summary.timings = Json{{"read", read_seconds}, {"cut", insert_seconds + result.seconds_mesh}};
+  write_and_report(mesh, result, outputs, summary);
   return result;
 }
+
+// The material an embedding keeps, from "--keep inside|largest|point X Y Z".
+EmbedOptions keep_option(const std::vector<std::string>& words) {
+  EmbedOptions options;
+  const std::string& mode = words.empty() ? std::string("inside") : words.front();
+  const auto bad = [](const std::string& why) {
+    return Error(ErrorKind::kInvalidArgument, "--keep: " + why + " (use: inside, largest, or point X Y Z)");
+  };
+  if (mode == "inside" || mode == "largest") {
+    if (words.size() > 1) throw bad("'" + mode + "' takes no coordinates");
+    options.keep = mode == "inside" ? KeepMaterial::kInside : KeepMaterial::kLargest;
+    return options;
+  }
+  if (mode != "point") throw bad("unknown choice '" + mode + "'");
+  if (words.size() != 4) throw bad("'point' needs three coordinates");
+  options.keep = KeepMaterial::kPoint;
+  for (int k = 0; k < 3; ++k) {
+    std::size_t used = 0;
+    double value = 0;
+    try {
+      value = std::stod(words[k + 1], &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    if (used != words[k + 1].size() || !std::isfinite(value)) throw bad("'" + words[k + 1] + "' is not a finite number");
+    options.point[k] = value;
+  }
+  return options;
+}
+
+}  // namespace
+
+void add_embed_command(CLI::App& app, Action& action) {
+  struct Options {
+    fs::path surface;
+    double spacing = 0;
+    Index cubes = 0;
+    fs::path mesh;
+    std::vector<std::string> keep;
+    CutOutputs outputs;
+    MeshOutputOptions out;
+  };
+  auto options = std::make_shared<Options>();
+  CLI::App* command = app.add_subcommand(
+      "embed", "Carve a surface out of a coarse tet mesh (a BCC lattice around it, or a given mesh): keep only the "
+               "material, one tet copy per disjoint part of it, and the surface embedded in the copies");
+  command->add_option("SURFACE", options->surface, "Surface to embed (" + supported_surface_extensions() + ")")->required();
+  auto* spacing_option = command->add_option("--spacing", options->spacing, "Cube size of the BCC lattice built around the surface");
+  auto* cubes_option = command->add_option("--cells", options->cubes,
+                                    "BCC cubes along the longest side of the surface's box (default 32)");
+  auto* mesh_option = command->add_option("--mesh", options->mesh, "Embed in this tet mesh instead of a lattice");
+  spacing_option->excludes(cubes_option)->excludes(mesh_option);
+  cubes_option->excludes(mesh_option);
+  command->add_option("--keep", options->keep,
+                      "What is material: 'inside' a closed surface (default; exact winding number, so a "
+                      "self-intersecting surface gives the union), the 'largest' piece, or the piece at 'point X Y Z'")
+      ->expected(1, 4);
+  command->add_option("--out-mesh", options->outputs.mesh,
+                      "Write the simulation mesh; .vtu carries original_tet, piece, material_volume and "
+                      "material_fraction per tet, .mesh and .msh the piece as a label");
+  command->add_option("--out-surface", options->outputs.surface,
+                      "Write the material surface (" + supported_surface_extensions() + ")");
+  command->add_option("--report", options->outputs.report,
+                      "Write a JSON report: the keys of 'tetcut cut', the surface check, time per stage, peak memory");
+  command->add_flag("--binary", options->outputs.binary, "Binary PLY or STL surface output");
+  options->out.add(command);
+  command->callback([options, &action] {
+    action = [options] {
+      const EmbedOptions embed_options = keep_option(options->keep);
+      std::vector<fs::path> inputs = {options->surface};
+      if (!options->mesh.empty()) inputs.push_back(options->mesh);
+      options->outputs.check(inputs);
+      options->outputs.mesh_options = options->out.write_options();
+      auto start = Clock::now();
+      const TriangleSurface surface = read_surface(options->surface);
+      if (surface.num_triangles() == 0) throw Error(ErrorKind::kInvalidInput, "the surface has no triangles", options->surface.string());
+      const double read_seconds = seconds_since(start);
+
+      start = Clock::now();
+      double spacing = options->spacing;
+      TetMesh mesh;
+      if (!options->mesh.empty()) {
+        mesh = read_tet_mesh(options->mesh);
+      } else {
+        if (spacing <= 0) spacing = spacing_for_cubes(surface, options->cubes > 0 ? options->cubes : 32);
+        mesh = embedding_lattice(surface, spacing);
+      }
+      const double mesh_seconds = seconds_since(start);
+
+      EmbedReport report;
+      Cutter cutter = [&] {
+        try {
+          return embed(mesh, surface, embed_options, &report);
+        } catch (const Error& e) {
+          if (e.kind() != ErrorKind::kInvalidInput || !e.file().empty()) throw;
+          throw Error(e.kind(), e.message(), options->surface.string());
+        }
+      }();
+      const SurfaceCheck& check = report.check;
+      if (check.degenerate_triangles > 0) {
+        fmt::print(stderr, "tetcut: warning: {}: skipped {} zero-area triangle(s)\n", options->surface.string(),
+                   check.degenerate_triangles);
+      }
+      start = Clock::now();
+      const CutResult result = cutter.result();
+      const double result_seconds = seconds_since(start) - result.seconds_surface;
+
+      RunSummary summary;
+      const std::string into = options->mesh.empty() ? fmt::format("a BCC lattice of spacing {:.6g}", spacing) : options->mesh.string();
+      summary.headline = fmt::format("embedded {} ({} triangles, {} component(s){}) in {}", options->surface.string(),
+                                     check.triangles, check.components, check.closed() ? ", closed" : ", open", into);
+      summary.report = Json{{"surface_in", options->surface.string()},
+                            {"mesh", options->mesh.empty() ? Json(nullptr) : Json(options->mesh.string())},
+                            {"lattice_spacing", options->mesh.empty() ? Json(spacing) : Json(nullptr)}};
+      summary.triangles = check.triangles;
+      summary.skipped = check.degenerate_triangles;
+      summary.timings = Json{{"read", read_seconds},
+                             {"lattice", mesh_seconds},
+                             {"check", report.seconds_check},
+                             {"insert", report.seconds_insert},
+                             {"classify", report.seconds_classify},
+                             {"copies", report.seconds_copies},
+                             {"pieces", result_seconds}};
+      const char* keep = embed_options.keep == KeepMaterial::kInside    ? "inside"
+                         : embed_options.keep == KeepMaterial::kLargest ? "largest"
+                                                                        : "point";
+      summary.extra = Json{{"embed",
+                            {{"keep", keep},
+                             {"surface_vertices", check.vertices},
+                             {"surface_components", check.components},
+                             {"surface_closed", check.closed()},
+                             {"boundary_edges", check.boundary_edges},
+                             {"nonmanifold_edges", check.nonmanifold_edges},
+                             {"tets_with_material", report.tets_with_material},
+                             {"tets_duplicated", report.tets_duplicated},
+                             {"overlap_polygons_joined", report.covered_facets_joined}}}};
+      summary.peak_memory = true;
+      write_and_report(mesh, result, options->outputs, summary);
+      return 0;
+    };
+  });
+}
+
+namespace {
 
 }  // namespace
 

@@ -16,6 +16,7 @@ void add_bcc_command(CLI::App& app, Action& action);
 void add_info_command(CLI::App& app, Action& action);
 void add_convert_command(CLI::App& app, Action& action);
 void add_cut_command(CLI::App& app, Action& action);
+void add_embed_command(CLI::App& app, Action& action);
 void add_demo_command(CLI::App& app, Action& action);
 
 }  // namespace tetcut::cli
