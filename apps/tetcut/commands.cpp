@@ -346,8 +346,8 @@ EmbedOptions keep_option(const std::vector<std::string>& words) {
 void add_embed_command(CLI::App& app, Action& action) {
   struct Options {
     fs::path surface;
-    double spacing = 0;
-    Index cubes = 0;
+    double spacing = std::nan("");  // NaN: not given
+    Index cubes = 32;
     fs::path mesh;
     std::vector<std::string> keep;
     CutOutputs outputs;
@@ -395,7 +395,7 @@ void add_embed_command(CLI::App& app, Action& action) {
       if (!options->mesh.empty()) {
         mesh = read_tet_mesh(options->mesh);
       } else {
-        if (spacing <= 0) spacing = spacing_for_cubes(surface, options->cubes > 0 ? options->cubes : 32);
+        if (std::isnan(spacing)) spacing = spacing_for_cubes(surface, options->cubes);
         mesh = embedding_lattice(surface, spacing);
       }
       const double mesh_seconds = seconds_since(start);

@@ -137,7 +137,11 @@ Index join_overlaps(CellComplex& complex) {
 }
 
 Side side_holding(const CellComplex& complex, std::span<const Index> tets, const Vec3& x) {
+  // Every tet and cell whose closure holds x is looked at: x on a covered facet of any of them
+  // (a tet touching x only at a node or edge may be unrefined while its neighbours are cut there).
   const TetMesh& mesh = complex.mesh();
+  const registry::IntersectionRegistry& registry = complex.registry();
+  Side found = cells::kOutside;
   for (const Index t : tets) {
     std::array<Vec3, 4> corner;
     for (int k = 0; k < 4; ++k) corner[k] = mesh.rest().row(mesh.tets()(t, k)).transpose();
@@ -148,8 +152,10 @@ Side side_holding(const CellComplex& complex, std::span<const Index> tets, const
       inside = geometry::orient3d(with_x[0], with_x[1], with_x[2], with_x[3]) >= 0;
     }
     if (!inside) continue;
-    if (!complex.refined(t)) return cells::unrefined_side(t);
-    const registry::IntersectionRegistry& registry = complex.registry();
+    if (!complex.refined(t)) {
+      if (found == cells::kOutside) found = cells::unrefined_side(t);
+      continue;
+    }
     for (CellId c = complex.first_cell(t); c >= 0; c = complex.cells()[c].next_in_tet) {
       bool in_cell = true, on_cut = false;
       for (const FacetId f : complex.cells()[c].facets) {
@@ -165,10 +171,11 @@ Side side_holding(const CellComplex& complex, std::span<const Index> tets, const
       if (on_cut) {
         throw Error(ErrorKind::kInvalidInput, "the point chosen to keep material lies on the cut surface: move it off");
       }
-      return c;
+      if (found == cells::kOutside || !cells::is_cell(found)) found = c;
     }
   }
-  throw Error(ErrorKind::kInvalidInput, "the point chosen to keep material lies outside the mesh");
+  if (found == cells::kOutside) throw Error(ErrorKind::kInvalidInput, "the point chosen to keep material lies outside the mesh");
+  return found;
 }
 
 }  // namespace tetcut::embedding
