@@ -170,6 +170,16 @@ struct CutOutputs {
   bool deformed = false;  // write current (deformed) positions instead of rest positions
   TetMeshWriteOptions mesh_options;
 
+  // Registers --out-mesh, --out-surface, --report (whose contents `report_keys` names) and --binary.
+  void add(CLI::App* command, const std::string& report_keys) {
+    command->add_option("--out-mesh", mesh,
+                        "Write the simulation mesh; .vtu carries original_tet, piece, material_volume and "
+                        "material_fraction per tet, .mesh and .msh the piece as a label");
+    command->add_option("--out-surface", surface, "Write the material surface (" + supported_surface_extensions() + ")");
+    command->add_option("--report", report, "Write a JSON report: " + report_keys);
+    command->add_flag("--binary", binary, "Binary PLY or STL surface output");
+  }
+
   // Checks every output before any work, so a typo costs nothing and nothing is half written.
   void check(const std::vector<fs::path>& inputs) const {
     for (const fs::path* output : {&mesh, &surface, &report}) {
@@ -368,14 +378,7 @@ void add_embed_command(CLI::App& app, Action& action) {
                       "What is material: 'inside' a closed surface (default; exact winding number, so a "
                       "self-intersecting surface gives the union), the 'largest' piece, or the piece at 'point X Y Z'")
       ->expected(1, 4);
-  command->add_option("--out-mesh", options->outputs.mesh,
-                      "Write the simulation mesh; .vtu carries original_tet, piece, material_volume and "
-                      "material_fraction per tet, .mesh and .msh the piece as a label");
-  command->add_option("--out-surface", options->outputs.surface,
-                      "Write the material surface (" + supported_surface_extensions() + ")");
-  command->add_option("--report", options->outputs.report,
-                      "Write a JSON report: the keys of 'tetcut cut', the surface check, time per stage, peak memory");
-  command->add_flag("--binary", options->outputs.binary, "Binary PLY or STL surface output");
+  options->outputs.add(command, "the keys of 'tetcut cut', the surface check, time per stage, peak memory");
   options->out.add(command);
   command->callback([options, &action] {
     action = [options] {
@@ -626,13 +629,7 @@ void add_cut_command(CLI::App& app, Action& action) {
   command->add_option("CUT", options->cuts, "Cut surfaces, one batch each (" + supported_surface_extensions() + ")")
       ->required()
       ->expected(1, -1);
-  command->add_option("--out-mesh", options->outputs.mesh,
-                      "Write the cut simulation mesh; .vtu carries original_tet, piece, material_volume and "
-                      "material_fraction per tet, .mesh and .msh the piece as a label");
-  command->add_option("--out-surface", options->outputs.surface,
-                      "Write the material surface (" + supported_surface_extensions() + ")");
-  command->add_option("--report", options->outputs.report, "Write a JSON report: counts, piece volumes, surface, timings");
-  command->add_flag("--binary", options->outputs.binary, "Binary PLY or STL surface output");
+  options->outputs.add(command, "counts, piece volumes, surface, timings");
   command->add_option("--deform", options->deform,
                       "A tet mesh with the same nodes and tets in deformed positions: the cuts are placed in world "
                       "space on that configuration (tets inverted there are not cut, with a warning)");

@@ -37,8 +37,8 @@ struct SurfaceCheck {
   bool closed() const { return boundary_edges == 0; }
 };
 
-/// Checks a surface. Throws Error(kInvalidInput) naming the vertex when a coordinate is not
-/// finite, or the triangle when it refers to a missing vertex. O(F log F).
+/// Checks a surface. Throws Error(kInvalidInput) naming the triangle when a corner is not finite
+/// or missing. O(F log F).
 SurfaceCheck check_surface(const TriangleSurface& surface);
 
 /// Which material an embedding keeps.

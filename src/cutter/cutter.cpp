@@ -16,6 +16,7 @@
 #include <string>
 
 #include "cutter/cutter_state.hpp"
+#include "mesh/surface_checks.hpp"
 #include "cells/cell_complex.hpp"
 #include "components/material_components.hpp"
 #include "connectivity/tet_copies.hpp"
@@ -29,20 +30,7 @@
 namespace tetcut {
 namespace {
 
-void check_batch(const TriangleSurface& batch) {
-  for (Index i = 0; i < batch.num_triangles(); ++i) {
-    for (int k = 0; k < 3; ++k) {
-      const Index v = batch.triangles(i, k);
-      if (v < 0 || v >= batch.num_vertices()) {
-        throw Error(ErrorKind::kInvalidInput, "cut triangle " + std::to_string(i) + " refers to vertex " +
-                                                  std::to_string(v) + ", which does not exist");
-      }
-      if (!batch.vertices.row(v).allFinite()) {
-        throw Error(ErrorKind::kInvalidInput, "cut triangle " + std::to_string(i) + " has a corner that is not finite");
-      }
-    }
-  }
-}
+void check_batch(const TriangleSurface& batch) { check_triangles(batch, "cut"); }
 
 std::array<Vec3, 3> corners_of(const TriangleSurface& batch, Index i) {
   return {batch.vertices.row(batch.triangles(i, 0)).transpose(), batch.vertices.row(batch.triangles(i, 1)).transpose(),

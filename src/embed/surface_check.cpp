@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "geometry/predicates.hpp"
+#include "mesh/surface_checks.hpp"
 
 namespace tetcut {
 namespace {
@@ -41,20 +42,7 @@ std::vector<Index> weld(const Points& vertices, Index* distinct) {
 SurfaceCheck check_surface(const TriangleSurface& surface) {
   SurfaceCheck check;
   check.triangles = surface.num_triangles();
-  for (Index v = 0; v < surface.num_vertices(); ++v) {
-    if (!surface.vertices.row(v).allFinite()) {
-      throw Error(ErrorKind::kInvalidInput, "surface vertex " + std::to_string(v) + " has a coordinate that is not finite");
-    }
-  }
-  for (Index t = 0; t < surface.num_triangles(); ++t) {
-    for (int k = 0; k < 3; ++k) {
-      const Index v = surface.triangles(t, k);
-      if (v < 0 || v >= surface.num_vertices()) {
-        throw Error(ErrorKind::kInvalidInput, "surface triangle " + std::to_string(t) + " refers to vertex " +
-                                                  std::to_string(v) + ", which does not exist");
-      }
-    }
-  }
+  check_triangles(surface, "surface");
   const std::vector<Index> id = weld(surface.vertices, &check.vertices);
 
   // Directed edges as (low, high, +1 when it runs low -> high); sorted, each undirected edge is a
@@ -119,11 +107,11 @@ namespace {
 
 Box surface_box(const TriangleSurface& surface) {
   if (surface.num_triangles() == 0) throw Error(ErrorKind::kInvalidInput, "the surface has no triangles");
+  check_triangles(surface, "surface");
   Box box{Vec3::Constant(std::numeric_limits<double>::infinity()), Vec3::Constant(-std::numeric_limits<double>::infinity())};
   for (Index t = 0; t < surface.num_triangles(); ++t) {
     for (int k = 0; k < 3; ++k) {
       const Vec3 x = surface.vertices.row(surface.triangles(t, k)).transpose();
-      if (!x.allFinite()) throw Error(ErrorKind::kInvalidInput, "surface triangle " + std::to_string(t) + " has a corner that is not finite");
       box.min = box.min.cwiseMin(x);
       box.max = box.max.cwiseMax(x);
     }

@@ -100,7 +100,7 @@ TEST(CheckSurface, RejectsNanAndMissingVertices) {
     check_surface(s);
     FAIL() << "a NaN was accepted";
   } catch (const Error& e) {
-    EXPECT_NE(e.message().find("vertex 3"), std::string::npos) << e.message();
+    EXPECT_NE(e.message().find("not finite"), std::string::npos) << e.message();
   }
   s = box_surface(Box{Vec3::Zero(), Vec3::Ones()});
   s.triangles(5, 2) = 8;
