@@ -1,0 +1,138 @@
+#pragma once
+// Finite elements on (cut) tet meshes: hyperelastic energies per tet and an implicit integrator.
+//
+//   tetcut::sim::Simulator sim(result.mesh.mesh, material, fractions);  // fractions: per tet copy
+//   sim.pin(node);
+//   for (...) sim.step(options);                                        // backward Euler
+//
+// Each tet copy of a cut mesh is a whole tet holding part of its material: its mass and elastic
+// energy are scaled by its material volume fraction, floored at kMinVolumeFraction so that a copy
+// holding a sliver of material keeps some stiffness and mass and the system stays well
+// conditioned.
+
+#include <tetcut/tet_mesh.hpp>
+
+#include <span>
+#include <vector>
+
+namespace tetcut::sim {
+
+using Mat3 = Eigen::Matrix3d;
+/// d vec(P) / d vec(F), with vec stacking columns (Eigen's default).
+using Mat9 = Eigen::Matrix<double, 9, 9>;
+
+enum class Model {
+  kCorotated,         ///< fixed corotated (Stomakhin et al. 2012): mu |F - R|^2 + lambda/2 (J - 1)^2
+  kStableNeoHookean,  ///< Smith, de Goes, Kim 2018, with the log(I_C + 1) term; rest stable
+};
+
+/// Lamé parameters.
+struct Lame {
+  double mu = 0, lambda = 0;
+};
+/// From Young's modulus E > 0 and Poisson's ratio -1 < nu < 0.5; Error(kInvalidArgument) otherwise.
+Lame lame_parameters(double youngs_modulus, double poissons_ratio);
+/// The parameters a model's energy uses so that its small-strain behaviour is that of linear
+/// elasticity with `lame` (Stable Neo-Hookean: mu' = 4/3 mu, lambda' = lambda + 5/6 mu).
+Lame model_parameters(Model model, const Lame& lame);
+
+/// Strain energy density Psi(F), its first Piola-Kirchhoff stress P = dPsi/dF, and dP/dF, for a
+/// model with parameters as returned by model_parameters.
+double energy_density(Model model, const Lame& p, const Mat3& F);
+Mat3 first_piola(Model model, const Lame& p, const Mat3& F);
+Mat9 stress_derivative(Model model, const Lame& p, const Mat3& F);
+/// dP/dF with negative eigenvalues clamped to zero (symmetric positive semi-definite), for Newton.
+Mat9 projected_stress_derivative(Model model, const Lame& p, const Mat3& F);
+
+struct Material {
+  Model model = Model::kStableNeoHookean;
+  double youngs_modulus = 1e5;  ///< Pa
+  double poissons_ratio = 0.3;
+  double density = 1000;        ///< kg / m^3
+  /// Rayleigh damping: force -(mass_damping M + stiffness_damping K) v, K the stiffness at the
+  /// start of the step.
+  double mass_damping = 0, stiffness_damping = 0;
+};
+
+/// Copies holding less material than this fraction of their tet count as holding this much.
+inline constexpr double kMinVolumeFraction = 0.01;
+
+enum class LinearSolver {
+  kCholesky,           ///< sparse LDL^T (Eigen), exact; best up to some 10^5 unknowns
+  kConjugateGradient,  ///< conjugate gradients with an incomplete Cholesky preconditioner
+};
+
+struct StepOptions {
+  double dt = 1.0 / 120;
+  Vec3 gravity = Vec3(0, 0, -9.81);
+  int max_newton_iterations = 30;
+  /// Newton stops when half the Newton decrement, -g.d / 2 (the energy the step expects to gain),
+  /// falls below tolerance^2 times the kinetic energy scale M (L / dt)^2, L the mesh's size: a
+  /// step whose positions are settled to about tolerance * L.
+  double tolerance = 1e-7;
+  LinearSolver solver = LinearSolver::kCholesky;
+};
+
+struct StepReport {
+  int newton_iterations = 0;
+  bool converged = false;
+  double energy = 0;  ///< the incremental potential at the end of the step
+};
+
+class Simulator {
+ public:
+  /// The mesh's rest positions define the material; its current positions are the start state
+  /// (velocities zero). `volume_fraction` per tet (empty: all 1) scales mass and energy, floored
+  /// at kMinVolumeFraction. Error(kInvalidArgument) on a bad material or fraction count.
+  Simulator(const TetMesh& mesh, const Material& material, std::span<const double> volume_fraction = {});
+
+  Index num_nodes() const { return static_cast<Index>(x_.rows()); }
+  const Points& positions() const { return x_; }
+  const Points& velocities() const { return v_; }
+  void set_positions(const Points& x);
+  void set_velocities(const Points& v);
+  /// Per node lumped mass.
+  const Eigen::VectorXd& masses() const { return mass_; }
+
+  /// Holds a node where it is.
+  void pin(Index node);
+  /// Moves a node to `target` over the next step, whatever the forces (a kinematic node).
+  void move_to(Index node, const Vec3& target);
+  /// Frees a pinned or kinematic node.
+  void release(Index node);
+
+  /// One backward Euler step: minimises the incremental potential by Newton's method with a
+  /// backtracking line search, then sets velocities to (x_new - x_old) / dt.
+  StepReport step(const StepOptions& options);
+  /// Static equilibrium under gravity with the pinned and kinematic nodes held: Newton on the
+  /// elastic energy minus gravity's work (no inertia). Velocities are set to zero.
+  StepReport solve_static(const StepOptions& options);
+
+  /// Elastic energy of the current positions.
+  double elastic_energy() const;
+  /// Gradient of the elastic energy with respect to the positions (|V| x 3): minus the forces.
+  Points elastic_gradient() const;
+  /// Total momentum sum m v.
+  Vec3 momentum() const;
+
+ private:
+  struct Element {
+    std::array<Index, 4> nodes;
+    Eigen::Matrix<double, 4, 3> weights;  // dF/dx: F = sum_a x_a w_a^T
+    double volume;                        // rest volume times the material fraction
+  };
+  StepReport minimise(const StepOptions& options, bool inertia);
+  Mat3 deformation_gradient(const Element& e, const Points& x) const;
+
+  Material material_;
+  Lame parameters_;
+  std::vector<Element> elements_;
+  Points x_, v_;
+  Eigen::VectorXd mass_;
+  double size_ = 1;
+  // Per node: -1 free, 0 pinned, 1 moved to target_.
+  std::vector<std::int8_t> constraint_;
+  Points target_;
+};
+
+}  // namespace tetcut::sim
