@@ -10,6 +10,7 @@
 // holding a sliver of material keeps some stiffness and mass and the system stays well
 // conditioned.
 
+#include <tetcut/cutter.hpp>
 #include <tetcut/tet_mesh.hpp>
 
 #include <span>
@@ -79,6 +80,34 @@ struct StepReport {
   double energy = 0;  ///< the incremental potential at the end of the step
 };
 
+/// A point that moves with one tet: sum of weights[k] times node k of tet `tet` (weights sum to 1),
+/// e.g. a vertex of the material surface (MaterialSurface::vertex_tet and vertex_weights).
+struct EmbeddedPoint {
+  Index tet = -1;
+  Eigen::Vector4d weights = Eigen::Vector4d::Constant(0.25);
+};
+
+/// A solid obstacle the contact points are kept out of: half-space below a plane (`point`, outward
+/// `normal`), a ball, or an axis-aligned box.
+struct Obstacle {
+  enum class Kind { kPlane, kSphere, kBox } kind = Kind::kPlane;
+  Vec3 point = Vec3::Zero();            ///< plane: a point on it; sphere: the centre; box: min corner
+  Vec3 normal = Vec3(0, 0, 1);          ///< plane: outward normal; box: max corner
+  double radius = 0;                    ///< sphere
+  static Obstacle plane(const Vec3& point, const Vec3& normal) { return {Kind::kPlane, point, normal.normalized(), 0}; }
+  static Obstacle sphere(const Vec3& centre, double radius) { return {Kind::kSphere, centre, Vec3::Zero(), radius}; }
+  static Obstacle box(const Vec3& min, const Vec3& max) { return {Kind::kBox, min, max, 0}; }
+  /// Signed distance of x from the obstacle's surface (negative inside) and the outward direction
+  /// there.
+  double distance(const Vec3& x, Vec3* direction) const;
+};
+
+/// Pairs of points facing each other across an incision: vertices of the material surface lying
+/// on cut triangles first_cut .. end_cut - 1 (MaterialSurface::triangle_source) that have the same
+/// rest position but belong to different tet copies. Springs between them close the incision.
+std::vector<std::pair<EmbeddedPoint, EmbeddedPoint>> incision_pairs(const MaterialSurface& surface, std::int64_t first_cut,
+                                                                    std::int64_t end_cut);
+
 class Simulator {
  public:
   /// The mesh's rest positions define the material; its current positions are the start state
@@ -108,6 +137,21 @@ class Simulator {
   /// elastic energy minus gravity's work (no inertia). Velocities are set to zero.
   StepReport solve_static(const StepOptions& options);
 
+  /// Contact: each point is pushed out of every obstacle by a penalty (stiffness / 2) d^2 on its
+  /// penetration depth d, a soft constraint that the implicit step treats like any other energy.
+  void set_contact_points(std::vector<EmbeddedPoint> points) { contact_points_ = std::move(points); }
+  void add_obstacle(const Obstacle& obstacle) { obstacles_.push_back(obstacle); }
+  /// N/m; by default 10 E h, with h the mean edge length of the rest mesh.
+  void set_contact_stiffness(double stiffness) { contact_stiffness_ = stiffness; }
+  double contact_stiffness() const { return contact_stiffness_; }
+  /// A zero-rest-length spring (stiffness / 2) |p - q|^2 between two points, e.g. across an
+  /// incision to close it.
+  void add_spring(const EmbeddedPoint& p, const EmbeddedPoint& q, double stiffness);
+  void clear_springs() { springs_.clear(); }
+  Index num_springs() const { return static_cast<Index>(springs_.size()); }
+  /// Where an embedded point is now.
+  Vec3 position(const EmbeddedPoint& p) const;
+
   /// Elastic energy of the current positions.
   double elastic_energy() const;
   /// Gradient of the elastic energy with respect to the positions (|V| x 3): minus the forces.
@@ -124,7 +168,20 @@ class Simulator {
   StepReport minimise(const StepOptions& options, bool inertia);
   Mat3 deformation_gradient(const Element& e, const Points& x) const;
 
+  struct Spring {
+    EmbeddedPoint p, q;
+    double stiffness;
+  };
+  // The soft constraints as energies of one point y = sum_i c_i x_{n_i} (up to 8 nodes); calls
+  // visit(nodes, coefficients, count, energy, dE/dy, d2E/dy2) for each active one at positions x.
+  template <typename Visit>
+  void for_each_constraint(const Points& x, Visit&& visit) const;
+
   Material material_;
+  std::vector<EmbeddedPoint> contact_points_;
+  std::vector<Obstacle> obstacles_;
+  double contact_stiffness_ = 0;
+  std::vector<Spring> springs_;
   Lame parameters_;
   std::vector<Element> elements_;
   Points x_, v_;

@@ -11,6 +11,9 @@
 #include <tbb/parallel_reduce.h>
 
 #include <algorithm>
+#include <limits>
+#include <map>
+#include <stdexcept>
 #include <cmath>
 #include <string>
 
@@ -72,6 +75,96 @@ Simulator::Simulator(const TetMesh& mesh, const Material& material, std::span<co
   }
   const Vec3 extent = rest.colwise().maxCoeff() - rest.colwise().minCoeff();
   size_ = std::max(extent.norm(), 1e-300);
+  double edges = 0;
+  for (const Element& e : elements_) {
+    for (const auto& edge : kTetEdges) edges += (rest.row(e.nodes[edge[0]]) - rest.row(e.nodes[edge[1]])).norm();
+  }
+  contact_stiffness_ = elements_.empty() ? 0 : 10 * material.youngs_modulus * edges / (6.0 * static_cast<double>(elements_.size()));
+}
+
+double Obstacle::distance(const Vec3& x, Vec3* direction) const {
+  switch (kind) {
+    case Kind::kPlane:
+      *direction = normal;
+      return (x - point).dot(normal);
+    case Kind::kSphere: {
+      const Vec3 r = x - point;
+      const double length = r.norm();
+      *direction = length > 0 ? Vec3(r / length) : Vec3(0, 0, 1);
+      return length - radius;
+    }
+    case Kind::kBox: {
+      // Outside: distance to the box (positive); inside: minus the distance to the nearest face.
+      const Vec3 below = point - x, above = x - normal;
+      const Vec3 outside = below.cwiseMax(above).cwiseMax(0.0);
+      if (outside.squaredNorm() > 0) {
+        const Vec3 nearest = x.cwiseMax(point).cwiseMin(normal);
+        *direction = (x - nearest).normalized();
+        return outside.norm();
+      }
+      double depth = std::numeric_limits<double>::infinity();
+      for (int k = 0; k < 3; ++k) {
+        for (const int side : {-1, 1}) {
+          const double d = side < 0 ? x[k] - point[k] : normal[k] - x[k];
+          if (d < depth) {
+            depth = d;
+            *direction = Vec3::Zero();
+            (*direction)[k] = side;
+          }
+        }
+      }
+      return -depth;
+    }
+  }
+  return 0;
+}
+
+void Simulator::add_spring(const EmbeddedPoint& p, const EmbeddedPoint& q, double stiffness) {
+  for (const EmbeddedPoint* e : {&p, &q}) {
+    if (e->tet < 0 || e->tet >= static_cast<Index>(elements_.size())) throw Error(ErrorKind::kInvalidArgument, "spring: no such tet");
+  }
+  if (!(stiffness >= 0)) throw Error(ErrorKind::kInvalidArgument, "spring: stiffness must not be negative");
+  springs_.push_back({p, q, stiffness});
+}
+
+Vec3 Simulator::position(const EmbeddedPoint& p) const {
+  Vec3 y = Vec3::Zero();
+  for (int k = 0; k < 4; ++k) y += p.weights[k] * x_.row(elements_[p.tet].nodes[k]).transpose();
+  return y;
+}
+
+template <typename Visit>
+void Simulator::for_each_constraint(const Points& x, Visit&& visit) const {
+  std::array<Index, 8> nodes;
+  std::array<double, 8> coefficients;
+  for (const EmbeddedPoint& point : contact_points_) {
+    Vec3 y = Vec3::Zero();
+    for (int k = 0; k < 4; ++k) {
+      nodes[k] = elements_[point.tet].nodes[k];
+      coefficients[k] = point.weights[k];
+      y += coefficients[k] * x.row(nodes[k]).transpose();
+    }
+    for (const Obstacle& obstacle : obstacles_) {
+      Vec3 n;
+      const double d = obstacle.distance(y, &n);
+      if (d >= 0) continue;
+      // (k / 2) d^2; the Hessian keeps the normal part only (positive semi-definite).
+      visit(nodes, coefficients, 4, 0.5 * contact_stiffness_ * d * d, Vec3(contact_stiffness_ * d * n),
+            Mat3(contact_stiffness_ * n * n.transpose()));
+    }
+  }
+  for (const Spring& spring : springs_) {
+    Vec3 y = Vec3::Zero();
+    for (int k = 0; k < 4; ++k) {
+      nodes[k] = elements_[spring.p.tet].nodes[k];
+      nodes[k + 4] = elements_[spring.q.tet].nodes[k];
+      coefficients[k] = spring.p.weights[k];
+      coefficients[k + 4] = -spring.q.weights[k];
+    }
+    for (int k = 0; k < 8; ++k) y += coefficients[k] * x.row(nodes[k]).transpose();
+    visit(nodes, coefficients, 8, 0.5 * spring.stiffness * y.squaredNorm(), Vec3(spring.stiffness * y),
+          Mat3(spring.stiffness * Mat3::Identity()));
+  }
 }
 
 void Simulator::set_positions(const Points& x) {
@@ -193,6 +286,7 @@ StepReport Simulator::minimise(const StepOptions& options, bool inertia) {
       }
       total -= mass_[v] * options.gravity.dot(p);
     }
+    for_each_constraint(at, [&](const auto&, const auto&, int, double energy, const Vec3&, const Mat3&) { total += energy; });
     return total;
   };
 
@@ -210,13 +304,25 @@ StepReport Simulator::minimise(const StepOptions& options, bool inertia) {
       }
     }
   }
+  for (const Spring& spring : springs_) {
+    for (int r = 0; r < 24; ++r) {
+      const Index row = dof[3 * elements_[r < 12 ? spring.p.tet : spring.q.tet].nodes[(r % 12) / 3] + r % 3];
+      if (row < 0) continue;
+      for (int c = 0; c < 24; ++c) {
+        const Index col = dof[3 * elements_[c < 12 ? spring.p.tet : spring.q.tet].nodes[(c % 12) / 3] + c % 3];
+        if (col >= 0) triplets.emplace_back(row, col, 0.0);
+      }
+    }
+  }
   Sparse hessian(free, free);
   hessian.setFromTriplets(triplets.begin(), triplets.end());
   triplets = {};
   const auto slot = [&](Index row, Index col) {
     const auto* begin = hessian.innerIndexPtr() + hessian.outerIndexPtr()[col];
     const auto* end = hessian.innerIndexPtr() + hessian.outerIndexPtr()[col + 1];
-    return static_cast<Index>(std::lower_bound(begin, end, row) - hessian.innerIndexPtr());
+    const auto* found = std::lower_bound(begin, end, row);
+    if (found == end || *found != row) throw std::logic_error("simulator: an entry outside the Hessian's pattern");
+    return static_cast<Index>(found - hessian.innerIndexPtr());
   };
   std::vector<Index> diagonal(static_cast<std::size_t>(free));
   for (Index d = 0; d < free; ++d) diagonal[d] = slot(d, d);
@@ -279,6 +385,22 @@ StepReport Simulator::minimise(const StepOptions& options, bool inertia) {
         hessian.valuePtr()[diagonal[d]] += mass_[v] * inertia_weight;
       }
     }
+    for_each_constraint(x, [&](const std::array<Index, 8>& nodes, const std::array<double, 8>& c, int count, double,
+                               const Vec3& dE, const Mat3& d2E) {
+      for (int a = 0; a < count; ++a) {
+        for (int i = 0; i < 3; ++i) {
+          const Index row = dof[3 * nodes[a] + i];
+          if (row < 0) continue;
+          gradient[row] += c[a] * dE[i];
+          for (int b = 0; b < count; ++b) {
+            for (int j = 0; j < 3; ++j) {
+              const Index col = dof[3 * nodes[b] + j];
+              if (col >= 0 && d2E(i, j) != 0) hessian.valuePtr()[slot(row, col)] += c[a] * c[b] * d2E(i, j);
+            }
+          }
+        }
+      }
+    });
     if (options.solver == LinearSolver::kCholesky) {
       cholesky.factorize(hessian);
       step = cholesky.solve(-gradient);
@@ -320,6 +442,33 @@ StepReport Simulator::minimise(const StepOptions& options, bool inertia) {
   if (inertia) v_ = (x - start) / h;
   x_ = std::move(x);
   return report;
+}
+
+std::vector<std::pair<EmbeddedPoint, EmbeddedPoint>> incision_pairs(const MaterialSurface& surface, std::int64_t first_cut,
+                                                                    std::int64_t end_cut) {
+  // Vertices on the chosen cut triangles, by rest position; a position held by two copies is a
+  // point on both sides of the incision.
+  std::map<std::array<double, 3>, std::vector<Index>> by_position;
+  std::vector<std::uint8_t> seen(static_cast<std::size_t>(surface.surface.num_vertices()), 0);
+  for (Index t = 0; t < surface.surface.num_triangles(); ++t) {
+    const std::int64_t source = surface.triangle_source[t];
+    if (source < first_cut || source >= end_cut) continue;
+    for (int k = 0; k < 3; ++k) {
+      const Index v = surface.surface.triangles(t, k);
+      if (seen[v]) continue;
+      seen[v] = 1;
+      const auto row = surface.surface.vertices.row(v);
+      by_position[{row[0], row[1], row[2]}].push_back(v);
+    }
+  }
+  std::vector<std::pair<EmbeddedPoint, EmbeddedPoint>> pairs;
+  const auto point = [&](Index v) { return EmbeddedPoint{surface.vertex_tet[v], surface.vertex_weights.row(v).transpose()}; };
+  for (const auto& [position, vertices] : by_position) {
+    for (std::size_t i = 1; i < vertices.size(); ++i) {
+      if (surface.vertex_tet[vertices[i]] != surface.vertex_tet[vertices[0]]) pairs.emplace_back(point(vertices[0]), point(vertices[i]));
+    }
+  }
+  return pairs;
 }
 
 }  // namespace tetcut::sim

@@ -146,6 +146,90 @@ TEST_P(Integrator, CubeCutInTwoFallsApart) {
   EXPECT_LT(sim.elastic_energy(), 1e-9 * material.youngs_modulus);
 }
 
+TEST(Obstacle, SignedDistanceAndDirection) {
+  Vec3 n;
+  EXPECT_DOUBLE_EQ(Obstacle::plane(Vec3(0, 0, 1), Vec3(0, 0, 2)).distance(Vec3(5, 5, 0.5), &n), -0.5);
+  EXPECT_EQ(n, Vec3(0, 0, 1));
+  EXPECT_DOUBLE_EQ(Obstacle::sphere(Vec3(1, 0, 0), 0.5).distance(Vec3(1, 0.2, 0), &n), -0.3);
+  EXPECT_LT((n - Vec3(0, 1, 0)).norm(), 1e-15);
+  const Obstacle box = Obstacle::box(Vec3(0, 0, 0), Vec3(1, 2, 3));
+  EXPECT_NEAR(box.distance(Vec3(0.5, 1.9, 1.5), &n), -0.1, 1e-15);
+  EXPECT_LT((n - Vec3(0, 1, 0)).norm(), 1e-12);
+  EXPECT_DOUBLE_EQ(box.distance(Vec3(4, 2, 3), &n), 3);
+  EXPECT_EQ(n, Vec3(1, 0, 0));
+}
+
+TEST_P(Integrator, CubeComesToRestOnTheGround) {
+  // Dropped from 0.05 above the ground, its corners' contact keeps it above the plane up to the
+  // penalty's compliance, and damping brings it to rest.
+  const TetMesh cube = make_grid(Box{Vec3(0, 0, 0.05), Vec3(0.2, 0.2, 0.25)}, {2, 2, 2}, 5);
+  Material material;
+  material.model = GetParam();
+  material.youngs_modulus = 1e6;
+  material.mass_damping = 2;
+  Simulator sim(cube, material);
+  std::vector<EmbeddedPoint> points;
+  for (Index t = 0; t < cube.num_tets(); ++t) {
+    for (int k = 0; k < 4; ++k) {
+      EmbeddedPoint p{t, Eigen::Vector4d::Zero()};
+      p.weights[k] = 1;
+      points.push_back(p);
+    }
+  }
+  sim.set_contact_points(points);
+  sim.add_obstacle(Obstacle::plane(Vec3::Zero(), Vec3(0, 0, 1)));
+  StepOptions options;
+  options.dt = 0.01;
+  for (int s = 0; s < 150; ++s) ASSERT_TRUE(sim.step(options).converged) << "step " << s;
+  double lowest = 1e300;
+  for (const EmbeddedPoint& p : points) lowest = std::min(lowest, sim.position(p)[2]);
+  // Weight m g shared by the bottom points, each pushed by k d: d <= m g / k.
+  const double weight = sim.masses().sum() * 9.81;
+  EXPECT_LT(lowest, 0.0) << "resting on the ground means a little penetration";
+  EXPECT_GT(lowest, -weight / sim.contact_stiffness());
+  EXPECT_LT(sim.velocities().cwiseAbs().maxCoeff(), 1e-3);
+}
+
+TEST_P(Integrator, SpringsKeepAnIncisionClosed) {
+  // A block cut from the top down to half its height by x = 0.51; its top corners are pulled apart
+  // sideways. Without springs the incision opens; with springs between its two sides it stays shut.
+  const TetMesh block = make_grid(Box{}, {4, 4, 4}, 6);
+  Cutter cutter(block);
+  TriangleSurface incision;
+  incision.vertices.resize(4, 3);
+  incision.vertices << 0.51, -1, 0.5, 0.51, 2, 0.5, 0.51, 2, 2, 0.51, -1, 2;
+  incision.triangles.resize(2, 3);
+  incision.triangles << 0, 1, 2, 0, 2, 3;
+  cutter.cut(incision);
+  const CutResult cut = cutter.result();
+  ASSERT_EQ(cut.mesh.num_pieces(), 1);
+  const auto pairs = incision_pairs(cut.surface, 0, 2);
+  ASSERT_GT(pairs.size(), 10u);
+  const auto widest_gap = [&](bool springs) {
+    std::vector<double> fraction(static_cast<std::size_t>(cut.mesh.mesh.num_tets()), 1.0);
+    Material material;
+    material.model = GetParam();
+    Simulator sim(cut.mesh.mesh, material, fraction);
+    for (Index n = 0; n < sim.num_nodes(); ++n) {
+      const Vec3 X = cut.mesh.mesh.rest().row(n).transpose();
+      if (X[2] == 0) sim.pin(n);
+      if (X[2] == 1 && (X[0] == 0 || X[0] == 1)) sim.move_to(n, X + Vec3(X[0] == 0 ? -0.1 : 0.1, 0, 0));
+    }
+    if (springs) {
+      for (const auto& [p, q] : pairs) sim.add_spring(p, q, 100 * sim.contact_stiffness());
+    }
+    StepOptions options;
+    options.gravity = Vec3::Zero();
+    EXPECT_TRUE(sim.solve_static(options).converged);
+    double gap = 0;
+    for (const auto& [p, q] : pairs) gap = std::max(gap, (sim.position(p) - sim.position(q)).norm());
+    return gap;
+  };
+  const double open = widest_gap(false), closed = widest_gap(true);
+  EXPECT_GT(open, 0.05);
+  EXPECT_LT(closed, 0.01 * open);
+}
+
 INSTANTIATE_TEST_SUITE_P(BothModels, Integrator, ::testing::Values(Model::kCorotated, Model::kStableNeoHookean));
 
 TEST(Simulator, RejectsBadParameters) {
