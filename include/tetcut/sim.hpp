@@ -115,6 +115,14 @@ class Simulator {
   /// at kMinVolumeFraction. Error(kInvalidArgument) on a bad material or fraction count.
   Simulator(const TetMesh& mesh, const Material& material, std::span<const double> volume_fraction = {});
 
+  /// After a cut: the new mesh (same material) whose nodes from `first_new_node` on were split
+  /// from `new_node_source` (CutBatchReport). Old nodes keep their state; new ones start with
+  /// their source's position, velocity and constraint. Masses and elements are rebuilt with the
+  /// new volume fractions; springs and contact points, which name tets, are dropped (set them
+  /// again).
+  void remesh(const TetMesh& mesh, std::span<const double> volume_fraction, Index first_new_node,
+              std::span<const Index> new_node_source);
+
   Index num_nodes() const { return static_cast<Index>(x_.rows()); }
   const Points& positions() const { return x_; }
   const Points& velocities() const { return v_; }
@@ -142,7 +150,10 @@ class Simulator {
   void set_contact_points(std::vector<EmbeddedPoint> points) { contact_points_ = std::move(points); }
   void add_obstacle(const Obstacle& obstacle) { obstacles_.push_back(obstacle); }
   /// N/m; by default 10 E h, with h the mean edge length of the rest mesh.
-  void set_contact_stiffness(double stiffness) { contact_stiffness_ = stiffness; }
+  void set_contact_stiffness(double stiffness) {
+    contact_stiffness_ = stiffness;
+    contact_stiffness_given_ = true;
+  }
   double contact_stiffness() const { return contact_stiffness_; }
   /// A zero-rest-length spring (stiffness / 2) |p - q|^2 between two points, e.g. across an
   /// incision to close it.
@@ -166,6 +177,7 @@ class Simulator {
     double volume;                        // rest volume times the material fraction
   };
   StepReport minimise(const StepOptions& options, bool inertia);
+  void build(const TetMesh& mesh, std::span<const double> volume_fraction);
   Mat3 deformation_gradient(const Element& e, const Points& x) const;
 
   struct Spring {
@@ -181,6 +193,7 @@ class Simulator {
   std::vector<EmbeddedPoint> contact_points_;
   std::vector<Obstacle> obstacles_;
   double contact_stiffness_ = 0;
+  bool contact_stiffness_given_ = false;
   std::vector<Spring> springs_;
   Lame parameters_;
   std::vector<Element> elements_;

@@ -51,11 +51,17 @@ Simulator::Simulator(const TetMesh& mesh, const Material& material, std::span<co
   if (!(material.mass_damping >= 0) || !(material.stiffness_damping >= 0)) {
     throw Error(ErrorKind::kInvalidArgument, "damping coefficients must not be negative");
   }
+  build(mesh, volume_fraction);
+}
+
+void Simulator::build(const TetMesh& mesh, std::span<const double> volume_fraction) {
   if (!volume_fraction.empty() && static_cast<Index>(volume_fraction.size()) != mesh.num_tets()) {
     throw Error(ErrorKind::kInvalidArgument, "volume fractions: " + std::to_string(volume_fraction.size()) +
                                                  " values for " + std::to_string(mesh.num_tets()) + " tets");
   }
   const Points& rest = mesh.rest();
+  mass_ = Eigen::VectorXd::Zero(mesh.num_nodes());
+  elements_.clear();
   elements_.resize(static_cast<std::size_t>(mesh.num_tets()));
   for (Index t = 0; t < mesh.num_tets(); ++t) {
     Element& e = elements_[t];
@@ -66,12 +72,12 @@ Simulator::Simulator(const TetMesh& mesh, const Material& material, std::span<co
     e.weights.bottomRows<3>() = inverse;
     e.weights.row(0) = -inverse.colwise().sum();
     double fraction = volume_fraction.empty() ? 1.0 : volume_fraction[t];
-    if (!(fraction <= 1 + 1e-9)) {
+    if (!(fraction >= 0 && fraction <= 1 + 1e-9)) {
       throw Error(ErrorKind::kInvalidArgument, "volume fraction of tet " + std::to_string(t) + " is not in [0, 1]");
     }
     fraction = std::clamp(fraction, kMinVolumeFraction, 1.0);
     e.volume = dm.determinant() / 6 * fraction;
-    for (const Index n : e.nodes) mass_[n] += material.density * e.volume / 4;
+    for (const Index n : e.nodes) mass_[n] += material_.density * e.volume / 4;
   }
   const Vec3 extent = rest.colwise().maxCoeff() - rest.colwise().minCoeff();
   size_ = std::max(extent.norm(), 1e-300);
@@ -79,7 +85,8 @@ Simulator::Simulator(const TetMesh& mesh, const Material& material, std::span<co
   for (const Element& e : elements_) {
     for (const auto& edge : kTetEdges) edges += (rest.row(e.nodes[edge[0]]) - rest.row(e.nodes[edge[1]])).norm();
   }
-  contact_stiffness_ = elements_.empty() ? 0 : 10 * material.youngs_modulus * edges / (6.0 * static_cast<double>(elements_.size()));
+  if (contact_stiffness_given_) return;
+  contact_stiffness_ = elements_.empty() ? 0 : 10 * material_.youngs_modulus * edges / (6.0 * static_cast<double>(elements_.size()));
 }
 
 double Obstacle::distance(const Vec3& x, Vec3* direction) const {
@@ -165,6 +172,28 @@ void Simulator::for_each_constraint(const Points& x, Visit&& visit) const {
     visit(nodes, coefficients, 8, 0.5 * spring.stiffness * y.squaredNorm(), Vec3(spring.stiffness * y),
           Mat3(spring.stiffness * Mat3::Identity()));
   }
+}
+
+void Simulator::remesh(const TetMesh& mesh, std::span<const double> volume_fraction, Index first_new_node,
+                       std::span<const Index> new_node_source) {
+  if (first_new_node != num_nodes() || mesh.num_nodes() != first_new_node + static_cast<Index>(new_node_source.size())) {
+    throw Error(ErrorKind::kInvalidArgument, "remesh: the node counts do not match the cut report");
+  }
+  const Index old = num_nodes();
+  x_.conservativeResize(mesh.num_nodes(), 3);
+  v_.conservativeResize(mesh.num_nodes(), 3);
+  target_.conservativeResize(mesh.num_nodes(), 3);
+  for (Index i = 0; i < static_cast<Index>(new_node_source.size()); ++i) {
+    const Index source = new_node_source[i];
+    if (source < 0 || source >= old + i) throw Error(ErrorKind::kInvalidArgument, "remesh: a node's source does not exist");
+    x_.row(old + i) = x_.row(source);
+    v_.row(old + i) = v_.row(source);
+    target_.row(old + i) = target_.row(source);
+    constraint_.push_back(constraint_[source]);
+  }
+  contact_points_.clear();
+  springs_.clear();
+  build(mesh, volume_fraction);
 }
 
 void Simulator::set_positions(const Points& x) {
