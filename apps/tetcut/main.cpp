@@ -28,6 +28,7 @@ int main(int argc, char** argv) {
   tetcut::cli::add_convert_command(app, action);
   tetcut::cli::add_cut_command(app, action);
   tetcut::cli::add_embed_command(app, action);
+  tetcut::cli::add_sim_command(app, action);
   tetcut::cli::add_demo_command(app, action);
   try {
     app.parse(argc, argv);

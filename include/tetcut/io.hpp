@@ -66,6 +66,9 @@ TriangleSurface read_surface(const std::filesystem::path& path);
 void write_surface(const std::filesystem::path& path, const TriangleSurface& surface,
                    const SurfaceWriteOptions& options = {});
 
+/// Writes a surface as VTK XML PolyData (.vtp), which ParaView reads in .pvd series; write only.
+void write_vtk_polydata(const std::filesystem::path& path, const TriangleSurface& surface);
+
 /// Writes text to `path` through a temporary file renamed into place, like every writer here.
 void write_text_file(const std::filesystem::path& path, std::string_view text);
 

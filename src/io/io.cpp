@@ -165,6 +165,12 @@ TriangleSurface read_surface(const std::filesystem::path& path) {
   return surface;
 }
 
+void write_vtk_polydata(const std::filesystem::path& path, const TriangleSurface& surface) {
+  io::AtomicOutput out(path, true);
+  io::write_vtp(out.stream(), surface.vertices, surface.triangles);
+  out.commit();
+}
+
 void write_surface(const std::filesystem::path& path, const TriangleSurface& surface, const SurfaceWriteOptions& options) {
   const std::string ext = io::extension_of(path);
   if (file_kind(path) != FileKind::kSurface) unknown_extension(path, "surface", supported_surface_extensions());

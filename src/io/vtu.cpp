@@ -339,4 +339,26 @@ void write_vtu(std::ostream& out, const Points& points, const Tets& tets, const 
   out << "</Piece>\n</UnstructuredGrid>\n</VTKFile>\n";
 }
 
+void write_vtp(std::ostream& out, const Points& points, const Triangles& triangles) {
+  out << "<?xml version=\"1.0\"?>\n"
+         "<VTKFile type=\"PolyData\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n"
+         "<PolyData>\n<Piece NumberOfPoints=\""
+      << points.rows() << "\" NumberOfPolys=\"" << triangles.rows() << "\">\n<Points>\n";
+  std::string bytes;
+  for (Eigen::Index i = 0; i < points.rows(); ++i) {
+    for (int k = 0; k < 3; ++k) store_le<double>(bytes, points(i, k));
+  }
+  write_binary_array(out, "Float64", "Points", 3, bytes);
+  out << "</Points>\n<Polys>\n";
+  bytes.clear();
+  for (Eigen::Index t = 0; t < triangles.rows(); ++t) {
+    for (int k = 0; k < 3; ++k) store_le<std::int64_t>(bytes, triangles(t, k));
+  }
+  write_binary_array(out, "Int64", "connectivity", 1, bytes);
+  bytes.clear();
+  for (Eigen::Index t = 0; t < triangles.rows(); ++t) store_le<std::int64_t>(bytes, 3 * (t + 1));
+  write_binary_array(out, "Int64", "offsets", 1, bytes);
+  out << "</Polys>\n</Piece>\n</PolyData>\n</VTKFile>\n";
+}
+
 }  // namespace tetcut::io

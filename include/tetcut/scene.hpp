@@ -1,0 +1,116 @@
+#pragma once
+// Scenes: a JSON file describing a simulation with cuts, and a runner that writes its frames.
+//
+//   tetcut::Scene scene = tetcut::load_scene("slinky.json");   // validated, clear errors
+//   tetcut::run_scene(scene, "out", {});                       // frames + ParaView series
+//
+// The format (every key optional unless marked; times in seconds; lengths in the mesh's units):
+//
+//   { "mesh":      {"file": PATH} | {"grid": {"box": [x0,y0,z0,x1,y1,z1], "cells": [nx,ny,nz],
+//                                             "tets_per_cube": 5|6}}
+//                  | {"bcc": {"box": [...], "spacing": H}}                 (mesh or embed required)
+//     "embed":     {"surface": PATH, "keep": "inside"|"largest", "spacing": H | "cells": N}
+//     "material":  {"model": "stable_neo_hookean"|"corotated", "youngs_modulus", "poissons_ratio",
+//                   "density", "mass_damping", "stiffness_damping"}
+//     "gravity":   [gx, gy, gz]
+//     "time":      {"dt", "duration" (required), "output_every"}
+//     "solver":    {"tolerance", "max_newton_iterations", "linear": "cholesky"|"cg"}
+//     "pin":       [{"box": [...]}]                     nodes whose rest position is in the box
+//     "move":      [{"box": [...], "velocity": [...], "from", "until"}]   kinematic nodes
+//     "obstacles": [{"plane": {"point", "normal"}} | {"sphere": {"centre", "radius"}}
+//                   | {"box": {"min", "max"}}],
+//     "contact_stiffness": K
+//     "cuts":      [{"time", "space": "rest"|"world", and one of
+//                    "triangles": PATH | "plane": {"centre", "normal", "size"}
+//                    | "cylinder": {"centre", "axis", "radius", "length", "segments"}
+//                    | "helix": {"centre", "axis", "inner_radius", "outer_radius", "pitch", "turns",
+//                                "segments_per_turn"}
+//                    | "cookie_cutter": {"profile": [[u,v],...], "origin", "u", "v", "depth"}}]
+//     "transforms":[{"time", "rotate": {"axis", "degrees", "centre"}} | {"time", "translate": [...]}]
+//     "springs":   [{"time", "cuts": [FIRST, LAST], "stiffness"}]   close those cut events' incisions
+//     "output":    {"mesh": true, "surface": true} }
+//
+// Paths are relative to the scene file. Unknown keys are errors, so a typo is never ignored.
+
+#include <tetcut/cutter.hpp>
+#include <tetcut/embed.hpp>
+#include <tetcut/sim.hpp>
+
+#include <filesystem>
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace tetcut {
+
+struct SceneCut {
+  double time = 0;
+  bool world_space = true;
+  std::string description;  ///< e.g. "cylinder" or the file name
+  TriangleSurface triangles;
+};
+
+struct SceneTransform {
+  double time = 0;
+  Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();
+  Vec3 centre = Vec3::Zero();
+  Vec3 translation = Vec3::Zero();  ///< x -> rotation (x - centre) + centre + translation
+};
+
+struct SceneSprings {
+  double time = 0;
+  int first_cut = 0, last_cut = 0;  ///< indices into Scene::cuts (inclusive)
+  double stiffness = 0;             ///< 0: 100 times the contact stiffness
+};
+
+struct SceneMove {
+  Box box;
+  Vec3 velocity = Vec3::Zero();
+  double from = 0, until = std::numeric_limits<double>::infinity();
+};
+
+struct Scene {
+  std::filesystem::path source;
+  TetMesh mesh;
+  std::optional<TriangleSurface> embed_surface;
+  EmbedOptions embed_options;
+  sim::Material material;
+  sim::StepOptions step;
+  double duration = 0;
+  double output_every = 0;  ///< 0: every step
+  std::vector<Box> pins;
+  std::vector<SceneMove> moves;
+  std::vector<sim::Obstacle> obstacles;
+  double contact_stiffness = 0;  ///< 0: the simulator's default
+  std::vector<SceneCut> cuts;    ///< sorted by time
+  std::vector<SceneTransform> transforms;
+  std::vector<SceneSprings> springs;
+  bool write_mesh = true, write_surface = true;
+};
+
+/// Reads and validates a scene. Throws Error(kInvalidInput) naming the file and the key path
+/// (e.g. "cuts[2].cylinder.radius") for a missing, unknown or ill-typed key.
+Scene load_scene(const std::filesystem::path& path);
+
+struct SceneRunOptions {
+  int max_frames = -1;  ///< stop after this many output frames (after frame 0); -1: run to the end
+  /// Called after each output frame with (frame, frames expected).
+  std::function<void(int, int)> progress;
+};
+
+struct SceneSummary {
+  int frames = 0, steps = 0, cuts_applied = 0;
+  Index tets = 0, nodes = 0, pieces = 0;
+  double simulated_seconds = 0;
+  double wall_seconds = 0, seconds_per_frame = 0;
+  double mean_newton_iterations = 0;
+  int unconverged_steps = 0;
+};
+
+/// Runs the scene, writing into `directory`: mesh_NNNN.vtu (the simulation mesh, piece and
+/// material fraction per tet) and surface_NNNN.vtp (the material surface) per output frame,
+/// mesh.pvd and surface.pvd (ParaView series with their times) and summary.json.
+SceneSummary run_scene(const Scene& scene, const std::filesystem::path& directory, const SceneRunOptions& options = {});
+
+}  // namespace tetcut

@@ -1,0 +1,115 @@
+// Scene files: every error names the key, and a run writes the frames, the series and a summary
+// that agree with the simulation (cuts applied in flight, pieces falling on the ground).
+
+#include <gtest/gtest.h>
+
+#include <tetcut/error.hpp>
+#include <tetcut/io.hpp>
+#include <tetcut/scene.hpp>
+
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include "support/temp_dir.hpp"
+
+namespace tetcut {
+namespace {
+
+std::filesystem::path write_scene(const std::filesystem::path& dir, const std::string& text) {
+  const std::filesystem::path path = dir / "scene.json";
+  std::ofstream(path) << text;
+  return path;
+}
+
+std::string load_error(const std::string& text) {
+  testing::TempDir dir;
+  try {
+    load_scene(write_scene(dir.path(), text));
+  } catch (const Error& e) {
+    return e.what();
+  }
+  return "no error";
+}
+
+constexpr const char* kCube = R"("mesh": {"grid": {"box": [0, 0, 0.05, 1, 1, 1.05], "cells": [2, 2, 2]}})";
+
+TEST(Scene, ErrorsNameTheKey) {
+  const std::string time = R"("time": {"duration": 0.1})";
+  EXPECT_NE(load_error(std::string("{") + kCube + "," + time + R"(, "materal": {}})").find("unknown key 'materal'"), std::string::npos);
+  EXPECT_NE(load_error(std::string("{") + kCube + "}").find("missing key 'time'"), std::string::npos);
+  EXPECT_NE(load_error(std::string("{") + kCube + R"(, "time": {"duration": -1}})").find("time.duration: must be positive"),
+            std::string::npos);
+  EXPECT_NE(load_error(std::string("{") + kCube + "," + time + R"(, "material": {"youngs_modulus": "soft"}})")
+                .find("material.youngs_modulus: must be a number"),
+            std::string::npos);
+  EXPECT_NE(load_error(std::string("{") + kCube + "," + time +
+                       R"(, "cuts": [{"time": 0, "plane": {"centre": [0,0,0], "normal": [0,0,1], "size": 2}, "helix": {}}]})")
+                .find("cuts[0]: give exactly one of"),
+            std::string::npos);
+  EXPECT_NE(load_error(std::string("{") + kCube + "," + time +
+                       R"(, "cuts": [{"time": 0, "cylinder": {"centre": [0,0,0], "axis": [0,0,0], "radius": 1, "length": 1}}]})")
+                .find("cuts[0].cylinder.axis: must not be the zero vector"),
+            std::string::npos);
+  EXPECT_NE(load_error(std::string("{") + kCube + "," + time + R"(, "springs": [{"time": 0, "cuts": [0, 0]}]})")
+                .find("springs[0].cuts: names a cut that does not exist"),
+            std::string::npos);
+  EXPECT_NE(load_error(std::string("{") + kCube + "," + time + R"(, "material": {"model": "jelly"}})")
+                .find("'jelly' is not one of stable_neo_hookean, corotated"),
+            std::string::npos);
+  EXPECT_NE(load_error("{ \"mesh\": ").find("not valid JSON"), std::string::npos);
+  EXPECT_NE(load_error(R"({"time": {"duration": 1}})").find("missing key 'mesh'"), std::string::npos);
+}
+
+TEST(Scene, CutInFlightThenBothPiecesLandOnTheGround) {
+  testing::TempDir dir;
+  const std::string text = std::string("{") + kCube + R"(,
+    "material": {"youngs_modulus": 1e5, "density": 100, "mass_damping": 1},
+    "time": {"dt": 0.01, "duration": 0.6, "output_every": 0.1},
+    "obstacles": [{"plane": {"point": [0, 0, 0], "normal": [0, 0, 1]}}],
+    "cuts": [{"time": 0.05, "space": "world", "plane": {"centre": [0.52, 0.5, 0.5], "normal": [1, 0, 0], "size": 4}}]
+  })";
+  const Scene scene = load_scene(write_scene(dir.path(), text));
+  ASSERT_EQ(scene.cuts.size(), 1u);
+  const SceneSummary summary = run_scene(scene, dir.path() / "out");
+  EXPECT_EQ(summary.steps, 60);
+  EXPECT_EQ(summary.frames, 7);  // t = 0, 0.1, ..., 0.6
+  EXPECT_EQ(summary.cuts_applied, 1);
+  EXPECT_EQ(summary.pieces, 2);
+  EXPECT_EQ(summary.unconverged_steps, 0);
+  // The series lists every frame, and the last frame's mesh lies on the ground (penetration at
+  // most the penalty's compliance) with the cut's copies.
+  std::ifstream pvd(dir.path() / "out" / "mesh.pvd");
+  std::stringstream text_pvd;
+  text_pvd << pvd.rdbuf();
+  EXPECT_NE(text_pvd.str().find("mesh_0006.vtu"), std::string::npos);
+  EXPECT_NE(text_pvd.str().find("timestep=\"0.59999999999999998\""), std::string::npos);
+  const TetMesh last = read_tet_mesh(dir.path() / "out" / "mesh_0006.vtu");
+  EXPECT_EQ(last.num_tets(), summary.tets);
+  EXPECT_GT(last.num_tets(), 40);  // 40 tets, some duplicated by the cut
+  const double lowest = last.rest().col(2).minCoeff();
+  EXPECT_LT(lowest, 0.05);   // it fell
+  EXPECT_GT(lowest, -0.02);  // and the ground held it
+  EXPECT_TRUE(std::filesystem::exists(dir.path() / "out" / "surface_0006.vtp"));
+  EXPECT_TRUE(std::filesystem::exists(dir.path() / "out" / "summary.json"));
+}
+
+TEST(Scene, FramesLimitStopsEarly) {
+  testing::TempDir dir;
+  const std::string text = std::string("{") + kCube + R"(, "time": {"dt": 0.01, "duration": 1, "output_every": 0.05}})";
+  SceneRunOptions options;
+  options.max_frames = 2;
+  int calls = 0;
+  options.progress = [&](int, int expected) {
+    ++calls;
+    EXPECT_EQ(expected, 20);
+  };
+  const SceneSummary summary = run_scene(load_scene(write_scene(dir.path(), text)), dir.path() / "out", options);
+  EXPECT_EQ(summary.frames, 3);
+  EXPECT_EQ(summary.steps, 10);
+  EXPECT_EQ(calls, 3);
+  EXPECT_FALSE(std::filesystem::exists(dir.path() / "out" / "mesh_0003.vtu"));
+}
+
+}  // namespace
+}  // namespace tetcut
