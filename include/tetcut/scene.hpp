@@ -8,13 +8,13 @@
 //
 //   { "mesh":      {"file": PATH} | {"grid": {"box": [x0,y0,z0,x1,y1,z1], "cells": [nx,ny,nz],
 //                                             "tets_per_cube": 5|6}}
-//                  | {"bcc": {"box": [...], "spacing": H}}                 (mesh or embed required)
+//                  | {"bcc": {"box": [...], "spacing": H}} | {"tet": [[x,y,z] x 4]}   (mesh or embed required)
 //     "embed":     {"surface": PATH, "keep": "inside"|"largest", "spacing": H | "cells": N}
 //     "material":  {"model": "stable_neo_hookean"|"corotated", "youngs_modulus", "poissons_ratio",
 //                   "density", "mass_damping", "stiffness_damping"}
 //     "gravity":   [gx, gy, gz]
 //     "time":      {"dt", "duration" (required), "output_every"}
-//     "solver":    {"tolerance", "max_newton_iterations", "linear": "cholesky"|"cg"}
+//     "solver":    {"tolerance", "max_newton_iterations", "linear": "cg"|"cholesky"}
 //     "pin":       [{"box": [...]}]                     nodes whose rest position is in the box
 //     "move":      [{"box": [...], "velocity": [...], "from", "until"}]   kinematic nodes
 //     "obstacles": [{"plane": {"point", "normal"}} | {"sphere": {"centre", "radius"}}

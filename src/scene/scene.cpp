@@ -133,9 +133,18 @@ std::filesystem::path relative_to(const std::filesystem::path& scene, const std:
 }
 
 TetMesh load_mesh(const Value& mesh, const std::filesystem::path& source) {
-  mesh.allow({"file", "grid", "bcc"});
-  const int kinds = mesh.has("file") + mesh.has("grid") + mesh.has("bcc");
-  if (kinds != 1) mesh.fail("give exactly one of 'file', 'grid' or 'bcc'");
+  mesh.allow({"file", "grid", "bcc", "tet"});
+  const int kinds = mesh.has("file") + mesh.has("grid") + mesh.has("bcc") + mesh.has("tet");
+  if (kinds != 1) mesh.fail("give exactly one of 'file', 'grid', 'bcc' or 'tet'");
+  if (const auto tet = mesh.get("tet")) {
+    const std::vector<Value> corners = tet->array();
+    if (corners.size() != 4) tet->fail("must list 4 corners");
+    Points rest(4, 3);
+    for (int k = 0; k < 4; ++k) rest.row(k) = corners[k].vec3().transpose();
+    Tets tets(1, 4);
+    tets << 0, 1, 2, 3;
+    return TetMesh(std::move(rest), std::move(tets), tet->path());
+  }
   if (const auto file = mesh.get("file")) return read_tet_mesh(relative_to(source, file->string()));
   if (const auto grid = mesh.get("grid")) {
     grid->allow({"box", "cells", "tets_per_cube"});
@@ -261,7 +270,7 @@ Scene load_scene(const std::filesystem::path& path) {
     if (const auto v = solver->get("tolerance")) scene.step.tolerance = v->positive();
     if (const auto v = solver->get("max_newton_iterations")) scene.step.max_newton_iterations = v->integer(1);
     if (const auto v = solver->get("linear")) {
-      scene.step.solver = v->choice({"cholesky", "cg"}) == "cg" ? sim::LinearSolver::kConjugateGradient : sim::LinearSolver::kCholesky;
+      scene.step.solver = v->choice({"cg", "cholesky"}) == "cg" ? sim::LinearSolver::kConjugateGradient : sim::LinearSolver::kCholesky;
     }
   }
   if (const auto pins = root.get("pin")) {

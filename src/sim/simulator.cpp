@@ -359,6 +359,7 @@ StepReport Simulator::minimise(const StepOptions& options, bool inertia) {
   Eigen::SimplicialLDLT<Sparse> cholesky;
   Eigen::ConjugateGradient<Sparse, Eigen::Lower | Eigen::Upper, Eigen::IncompleteCholesky<double>> cg;
   if (options.solver == LinearSolver::kCholesky) cholesky.analyzePattern(hessian);
+  cg.setTolerance(1e-10);
 
   double total_mass = mass_.sum();
   double volume = 0;
@@ -436,6 +437,7 @@ StepReport Simulator::minimise(const StepOptions& options, bool inertia) {
       if (cholesky.info() != Eigen::Success) throw Error(ErrorKind::kInvalidInput, "the Newton system could not be factorised");
     } else {
       cg.compute(hessian);
+      if (cg.info() != Eigen::Success) throw Error(ErrorKind::kInvalidInput, "the Newton system could not be preconditioned");
       step = cg.solve(-gradient);
     }
     const double decrement = -gradient.dot(step);
