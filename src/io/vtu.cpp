@@ -289,6 +289,29 @@ void write_binary_array(std::ostream& out, const char* type, const char* name, i
   out << base64_encode(header) << base64_encode(bytes) << "\n</DataArray>\n";
 }
 
+// The Points element's array: coordinates as Float64 triples.
+void write_points_array(std::ostream& out, const Points& points) {
+  std::string bytes;
+  bytes.reserve(static_cast<std::size_t>(points.size()) * 8);
+  for (Eigen::Index i = 0; i < points.rows(); ++i) {
+    for (int k = 0; k < 3; ++k) store_le<double>(bytes, points(i, k));
+  }
+  write_binary_array(out, "Float64", "Points", 3, bytes);
+}
+
+// Connectivity and offsets of cells that each list cells.cols() point ids (one row per cell).
+template <typename Cells>
+void write_connectivity(std::ostream& out, const Cells& cells) {
+  std::string bytes;
+  for (Eigen::Index c = 0; c < cells.rows(); ++c) {
+    for (Eigen::Index k = 0; k < cells.cols(); ++k) store_le<std::int64_t>(bytes, cells(c, k));
+  }
+  write_binary_array(out, "Int64", "connectivity", 1, bytes);
+  bytes.clear();
+  for (Eigen::Index c = 0; c < cells.rows(); ++c) store_le<std::int64_t>(bytes, cells.cols() * (c + 1));
+  write_binary_array(out, "Int64", "offsets", 1, bytes);
+}
+
 }  // namespace
 
 TetMeshData read_vtu(std::string_view bytes, const std::string& source) { return VtuReader(bytes, source).read(); }
@@ -298,21 +321,10 @@ void write_vtu(std::ostream& out, const Points& points, const Tets& tets, const 
          "<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n"
          "<UnstructuredGrid>\n<Piece NumberOfPoints=\""
       << points.rows() << "\" NumberOfCells=\"" << tets.rows() << "\">\n<Points>\n";
-  std::string bytes;
-  bytes.reserve(static_cast<std::size_t>(points.size()) * 8);
-  for (Eigen::Index i = 0; i < points.rows(); ++i) {
-    for (int k = 0; k < 3; ++k) store_le<double>(bytes, points(i, k));
-  }
-  write_binary_array(out, "Float64", "Points", 3, bytes);
+  write_points_array(out, points);
   out << "</Points>\n<Cells>\n";
-  bytes.clear();
-  for (Eigen::Index t = 0; t < tets.rows(); ++t) {
-    for (int k = 0; k < 4; ++k) store_le<std::int64_t>(bytes, tets(t, k));
-  }
-  write_binary_array(out, "Int64", "connectivity", 1, bytes);
-  bytes.clear();
-  for (Eigen::Index t = 0; t < tets.rows(); ++t) store_le<std::int64_t>(bytes, 4 * (t + 1));
-  write_binary_array(out, "Int64", "offsets", 1, bytes);
+  write_connectivity(out, tets);
+  std::string bytes;
   bytes.assign(static_cast<std::size_t>(tets.rows()), static_cast<char>(kVtkTetra));
   write_binary_array(out, "UInt8", "types", 1, bytes);
   out << "</Cells>\n";
@@ -344,20 +356,9 @@ void write_vtp(std::ostream& out, const Points& points, const Triangles& triangl
          "<VTKFile type=\"PolyData\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n"
          "<PolyData>\n<Piece NumberOfPoints=\""
       << points.rows() << "\" NumberOfPolys=\"" << triangles.rows() << "\">\n<Points>\n";
-  std::string bytes;
-  for (Eigen::Index i = 0; i < points.rows(); ++i) {
-    for (int k = 0; k < 3; ++k) store_le<double>(bytes, points(i, k));
-  }
-  write_binary_array(out, "Float64", "Points", 3, bytes);
+  write_points_array(out, points);
   out << "</Points>\n<Polys>\n";
-  bytes.clear();
-  for (Eigen::Index t = 0; t < triangles.rows(); ++t) {
-    for (int k = 0; k < 3; ++k) store_le<std::int64_t>(bytes, triangles(t, k));
-  }
-  write_binary_array(out, "Int64", "connectivity", 1, bytes);
-  bytes.clear();
-  for (Eigen::Index t = 0; t < triangles.rows(); ++t) store_le<std::int64_t>(bytes, 3 * (t + 1));
-  write_binary_array(out, "Int64", "offsets", 1, bytes);
+  write_connectivity(out, triangles);
   out << "</Polys>\n</Piece>\n</PolyData>\n</VTKFile>\n";
 }
 
