@@ -25,7 +25,8 @@
 //                    | "cylinder": {"centre", "axis", "radius", "length", "segments"}
 //                    | "helix": {"centre", "axis", "inner_radius", "outer_radius", "pitch", "turns",
 //                                "segments_per_turn"}
-//                    | "cookie_cutter": {"profile": [[u,v],...], "origin", "u", "v", "depth"}}]
+//                    | "cookie_cutter": {"profile": [[u,v],...], "origin", "u", "v", "depth"}
+//                    | "blade": {"poses": [[ax,ay,az, bx,by,bz], ...]}}]   the strip a blade sweeps
 //     "transforms":[{"time", "rotate": {"axis", "degrees", "centre"}} | {"time", "translate": [...]}]
 //     "springs":   [{"time", "cuts": [FIRST, LAST], "stiffness"}]   close those cut events' incisions
 //     "output":    {"mesh": true, "surface": true} }

@@ -24,7 +24,7 @@ using Mat9 = Eigen::Matrix<double, 9, 9>;
 
 enum class Model {
   kCorotated,         ///< fixed corotated (Stomakhin et al. 2012): mu |F - R|^2 + lambda/2 (J - 1)^2
-  kStableNeoHookean,  ///< Smith, de Goes, Kim 2018, with the log(I_C + 1) term; rest stable
+  kStableNeoHookean,  ///< Smith, de Goes, Kim 2018, with the log(I_C + 1) term; rest stable, shifted to Psi(I) = 0
 };
 
 /// Lamé parameters.

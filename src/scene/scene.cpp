@@ -1,6 +1,7 @@
 // Scene files: validation with key paths in every message, and the runner: simulate, apply the
 // timed cuts, transforms and springs, and write frames and ParaView series.
 
+#include <tetcut/blade.hpp>
 #include <tetcut/cutting_surfaces.hpp>
 #include <tetcut/error.hpp>
 #include <tetcut/generators.hpp>
@@ -160,12 +161,13 @@ TetMesh load_mesh(const Value& mesh, const std::filesystem::path& source) {
 }
 
 SceneCut load_cut(const Value& cut, const std::filesystem::path& source) {
-  cut.allow({"time", "space", "triangles", "plane", "cylinder", "helix", "cookie_cutter"});
+  cut.allow({"time", "space", "triangles", "plane", "cylinder", "helix", "cookie_cutter", "blade"});
   SceneCut c;
   c.time = cut.at("time").non_negative();
   if (const auto space = cut.get("space")) c.world_space = space->choice({"rest", "world"}) == "world";
-  const int kinds = cut.has("triangles") + cut.has("plane") + cut.has("cylinder") + cut.has("helix") + cut.has("cookie_cutter");
-  if (kinds != 1) cut.fail("give exactly one of 'triangles', 'plane', 'cylinder', 'helix' or 'cookie_cutter'");
+  const int kinds = cut.has("triangles") + cut.has("plane") + cut.has("cylinder") + cut.has("helix") +
+                    cut.has("cookie_cutter") + cut.has("blade");
+  if (kinds != 1) cut.fail("give exactly one of 'triangles', 'plane', 'cylinder', 'helix', 'cookie_cutter' or 'blade'");
   if (const auto file = cut.get("triangles")) {
     c.description = file->string();
     c.triangles = read_surface(relative_to(source, c.description));
@@ -187,6 +189,16 @@ SceneCut load_cut(const Value& cut, const std::filesystem::path& source) {
     c.triangles = helical_ribbon(helix->at("centre").vec3(), helix->at("axis").direction(), inner, outer,
                                  helix->at("pitch").number(), helix->at("turns").positive(),
                                  helix->has("segments_per_turn") ? helix->at("segments_per_turn").integer(3) : 48);
+  } else if (const auto blade = cut.get("blade")) {
+    blade->allow({"poses"});
+    c.description = "blade";
+    std::vector<BladePose> poses;
+    for (const Value& pose : blade->at("poses").array()) {
+      const auto ab = pose.numbers(6);
+      poses.push_back({Vec3(ab[0], ab[1], ab[2]), Vec3(ab[3], ab[4], ab[5])});
+    }
+    if (poses.size() < 2) blade->at("poses").fail("needs at least 2 poses");
+    c.triangles = swept_blade(poses);
   } else {
     const Value cookie = cut.at("cookie_cutter");
     cookie.allow({"profile", "origin", "u", "v", "depth"});

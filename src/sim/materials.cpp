@@ -109,7 +109,9 @@ double energy_density(Model model, const Lame& p, const Mat3& F) {
     return p.mu * (F - R).squaredNorm() + 0.5 * p.lambda * (J - 1) * (J - 1);
   }
   const double ic = F.squaredNorm(), alpha = snh_alpha(p);
-  return 0.5 * p.mu * (ic - 3) + 0.5 * p.lambda * (J - alpha) * (J - alpha) - 0.5 * p.mu * std::log(ic + 1);
+  // Shifted by its value at rest, so that the rest state has zero energy (gradients unchanged).
+  const double at_rest = 0.5 * p.lambda * (1 - alpha) * (1 - alpha) - 0.5 * p.mu * std::log(4.0);
+  return 0.5 * p.mu * (ic - 3) + 0.5 * p.lambda * (J - alpha) * (J - alpha) - 0.5 * p.mu * std::log(ic + 1) - at_rest;
 }
 
 Mat3 first_piola(Model model, const Lame& p, const Mat3& F) {

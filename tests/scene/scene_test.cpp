@@ -94,6 +94,22 @@ TEST(Scene, CutInFlightThenBothPiecesLandOnTheGround) {
   EXPECT_TRUE(std::filesystem::exists(dir.path() / "out" / "summary.json"));
 }
 
+TEST(Scene, EveryCutterMakesTriangles) {
+  testing::TempDir dir;
+  const std::string text = std::string("{") + kCube + R"(, "time": {"duration": 0.01}, "cuts": [
+    {"time": 0, "plane": {"centre": [0.5, 0.5, 0.5], "normal": [0, 0, 1], "size": 2}},
+    {"time": 0, "cylinder": {"centre": [0.5, 0.5, 0.5], "axis": [0, 0, 1], "radius": 0.3, "length": 2, "segments": 16}},
+    {"time": 0, "helix": {"centre": [0.5, 0.5, 0], "axis": [0, 0, 1], "inner_radius": 0.1, "outer_radius": 0.4,
+                          "pitch": 0.3, "turns": 2, "segments_per_turn": 12}},
+    {"time": 0, "cookie_cutter": {"profile": [[0, 0], [0.2, 0], [0.1, 0.2]], "origin": [0.4, 0.4, 1.2],
+                                  "u": [1, 0, 0], "v": [0, 1, 0], "depth": -0.5}},
+    {"time": 0, "blade": {"poses": [[0, 0.5, 1.2, 0, 0.5, 0.6], [1, 0.5, 1.2, 1, 0.5, 0.6]]}}]})";
+  const Scene scene = load_scene(write_scene(dir.path(), text));
+  ASSERT_EQ(scene.cuts.size(), 5u);
+  const std::vector<Index> expected = {2, 32, 48, 6, 2};
+  for (std::size_t i = 0; i < scene.cuts.size(); ++i) EXPECT_EQ(scene.cuts[i].triangles.num_triangles(), expected[i]) << i;
+}
+
 TEST(Scene, FramesLimitStopsEarly) {
   testing::TempDir dir;
   const std::string text = std::string("{") + kCube + R"(, "time": {"dt": 0.01, "duration": 1, "output_every": 0.05}})";

@@ -68,6 +68,7 @@ TEST_P(Materials, StressDerivativeIsTheStressGradient) {
 
 TEST_P(Materials, RestIsStressFreeAndRotationsCostNothing) {
   const Lame p = model_parameters(GetParam(), lame_parameters(1e5, 0.3));
+  EXPECT_NEAR(energy_density(GetParam(), p, Mat3::Identity()), 0, 1e-9 * p.mu);
   EXPECT_LT(first_piola(GetParam(), p, Mat3::Identity()).norm(), 1e-9 * p.mu);
   const Mat3 R = Eigen::AngleAxisd(0.7, Vec3(1, 2, 3).normalized()).toRotationMatrix();
   EXPECT_NEAR(energy_density(GetParam(), p, R), energy_density(GetParam(), p, Mat3::Identity()), 1e-9 * p.mu);
