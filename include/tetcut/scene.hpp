@@ -107,6 +107,10 @@ struct SceneSummary {
   double wall_seconds = 0, seconds_per_frame = 0;
   double mean_newton_iterations = 0;
   int unconverged_steps = 0;
+  /// Springs across incisions at the end, and the widest distance between the two ends of one
+  /// when they were attached (how far the incision had opened) and at the end (how well it closed).
+  Index springs = 0;
+  double spring_gap_when_attached = 0, spring_gap_final = 0;
 };
 
 /// Runs the scene, writing into `directory`: mesh_NNNN.vtu (the simulation mesh, piece and

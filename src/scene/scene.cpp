@@ -425,6 +425,7 @@ SceneSummary run_scene(const Scene& scene, const std::filesystem::path& director
   // Cut id ranges of the applied cut events, for springs.
   std::vector<std::pair<std::int64_t, std::int64_t>> cut_ids(scene.cuts.size(), {-1, -1});
   std::vector<const SceneSprings*> active_springs;
+  std::vector<std::pair<sim::EmbeddedPoint, sim::EmbeddedPoint>> spring_ends;
   const auto refresh_constraints = [&] {
     if (!scene.obstacles.empty()) {
       std::vector<sim::EmbeddedPoint> points;
@@ -434,13 +435,22 @@ SceneSummary run_scene(const Scene& scene, const std::filesystem::path& director
       sim.set_contact_points(std::move(points));
     }
     sim.clear_springs();
+    spring_ends.clear();
     for (const SceneSprings* s : active_springs) {
       const double k = s->stiffness > 0 ? s->stiffness : 100 * sim.contact_stiffness();
       for (int c = s->first_cut; c <= s->last_cut; ++c) {
         if (cut_ids[c].first < 0) continue;  // not applied yet
-        for (const auto& [p, q] : sim::incision_pairs(result.surface, cut_ids[c].first, cut_ids[c].second)) sim.add_spring(p, q, k);
+        for (const auto& [p, q] : sim::incision_pairs(result.surface, cut_ids[c].first, cut_ids[c].second)) {
+          sim.add_spring(p, q, k);
+          spring_ends.emplace_back(p, q);
+        }
       }
     }
+  };
+  const auto widest_spring = [&] {
+    double gap = 0;
+    for (const auto& [p, q] : spring_ends) gap = std::max(gap, (sim.position(p) - sim.position(q)).norm());
+    return gap;
   };
   refresh_constraints();
 
@@ -521,11 +531,13 @@ SceneSummary run_scene(const Scene& scene, const std::filesystem::path& director
       }
       remeshed = true;
     }
+    bool springs_added = false;
     while (next_springs < scene.springs.size() && scene.springs[next_springs].time <= now) {
       active_springs.push_back(&scene.springs[next_springs++]);
-      remeshed = true;
+      remeshed = springs_added = true;
     }
     if (remeshed) refresh_constraints();
+    if (springs_added) summary.spring_gap_when_attached = std::max(summary.spring_gap_when_attached, widest_spring());
     // Kinematic nodes: those in an active move box go with its velocity; others are let go.
     for (Index n = 0; n < sim.num_nodes() && !scene.moves.empty(); ++n) {
       if (pinned[n]) continue;
@@ -549,6 +561,8 @@ SceneSummary run_scene(const Scene& scene, const std::filesystem::path& director
     }
   }
   summary.frames = static_cast<int>(times.size());
+  summary.springs = static_cast<Index>(spring_ends.size());
+  summary.spring_gap_final = widest_spring();
   summary.tets = result.mesh.mesh.num_tets();
   summary.nodes = result.mesh.mesh.num_nodes();
   summary.pieces = result.mesh.num_pieces();
@@ -567,7 +581,10 @@ SceneSummary run_scene(const Scene& scene, const std::filesystem::path& director
                   {"wall_seconds", summary.wall_seconds},
                   {"seconds_per_frame", summary.seconds_per_frame},
                   {"mean_newton_iterations", summary.mean_newton_iterations},
-                  {"unconverged_steps", summary.unconverged_steps}};
+                  {"unconverged_steps", summary.unconverged_steps},
+                  {"springs", summary.springs},
+                  {"spring_gap_when_attached", summary.spring_gap_when_attached},
+                  {"spring_gap_final", summary.spring_gap_final}};
   write_text_file(directory / "summary.json", json.dump(2) + "\n");
   return summary;
 }

@@ -110,6 +110,28 @@ TEST(Scene, EveryCutterMakesTriangles) {
   for (std::size_t i = 0; i < scene.cuts.size(); ++i) EXPECT_EQ(scene.cuts[i].triangles.num_triangles(), expected[i]) << i;
 }
 
+TEST(Scene, IncisionPulledOpenThenClosedBySprings) {
+  // The lip example, smaller: a slab cut from the top, its ends pulled apart and held, then
+  // springs across the cut pull its sides back together.
+  testing::TempDir dir;
+  const std::string text = R"({
+    "mesh": {"grid": {"box": [-1, -0.3, -0.3, 1, 0.3, 0.3], "cells": [10, 3, 3], "tets_per_cube": 5}},
+    "material": {"youngs_modulus": 3e4, "poissons_ratio": 0.4, "density": 1000, "mass_damping": 4},
+    "gravity": [0, 0, 0],
+    "time": {"dt": 0.01, "duration": 1.2, "output_every": 0.1},
+    "cuts": [{"time": 0.02, "plane": {"centre": [0.013, 0, 0.45], "normal": [1, 0, 0], "size": 0.7}}],
+    "move": [{"box": [-1.1, -1, -1, -0.9, 1, 1], "velocity": [-0.3, 0, -0.3], "from": 0.05, "until": 0.45},
+             {"box": [0.9, -1, -1, 1.1, 1, 1], "velocity": [0.3, 0, -0.3], "from": 0.05, "until": 0.45},
+             {"box": [-1.1, -1, -1, -0.9, 1, 1], "velocity": [0, 0, 0], "from": 0.45},
+             {"box": [0.9, -1, -1, 1.1, 1, 1], "velocity": [0, 0, 0], "from": 0.45}],
+    "springs": [{"time": 0.6, "cuts": [0, 0]}]})";
+  const SceneSummary s = run_scene(load_scene(write_scene(dir.path(), text)), dir.path() / "out");
+  EXPECT_EQ(s.unconverged_steps, 0);
+  EXPECT_GT(s.springs, 3);
+  EXPECT_GT(s.spring_gap_when_attached, 0.03);
+  EXPECT_LT(s.spring_gap_final, 0.05 * s.spring_gap_when_attached) << s.spring_gap_final << " of " << s.spring_gap_when_attached;
+}
+
 TEST(Scene, FramesLimitStopsEarly) {
   testing::TempDir dir;
   const std::string text = std::string("{") + kCube + R"(, "time": {"dt": 0.01, "duration": 1, "output_every": 0.05}})";
