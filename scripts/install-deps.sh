@@ -12,6 +12,9 @@ packages=(
   # Independent tools the tests cross-check against: TetGen writes meshes we must read, meshio
   # (Debian's Python 3) reads what we write.
   tetgen python3-meshio python3-numpy
+  # Offscreen rendering (tetcut render): EGL and OpenGL ES 3 headers, Mesa's EGL and software
+  # rasteriser (no GPU needed), libpng.
+  libegl-dev libgles-dev libegl-mesa0 libgl1-mesa-dri libpng-dev
   # Real scanned surfaces for tests and examples (armadillo, bunny, femur, knot, lion head, ...):
   # /usr/share/doc/libcgal-dev/data.tar.gz.
   libcgal-demo

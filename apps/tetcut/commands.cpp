@@ -2,6 +2,7 @@
 
 #include <tetcut/cutter.hpp>
 #include <tetcut/embed.hpp>
+#include <tetcut/render.hpp>
 #include <tetcut/scene.hpp>
 #include <tetcut/error.hpp>
 #include <tetcut/figures.hpp>
@@ -702,6 +703,68 @@ void add_sim_command(CLI::App& app, Action& action) {
       if (summary.unconverged_steps > 0) {
         fmt::print(stderr, "tetcut: warning: {} step(s) stopped before Newton converged\n", summary.unconverged_steps);
       }
+      return 0;
+    };
+  });
+}
+
+void add_render_command(CLI::App& app, Action& action) {
+  struct Options {
+    fs::path input;
+    fs::path out;
+    std::vector<int> size{800, 600};
+    render::Camera camera;
+    bool pieces = false;
+    std::vector<std::string> wireframe;
+    bool wireframe_given = false;
+  };
+  auto options = std::make_shared<Options>();
+  CLI::App* command = app.add_subcommand(
+      "render", "Render a surface or a tet mesh (its boundary) to a PNG, offscreen (OpenGL ES through EGL; Mesa's "
+                "software renderer needs no GPU)");
+  command->add_option("IN", options->input, "Surface or tet mesh file")->required();
+  command->add_option("-o,--out", options->out, "PNG to write")->required();
+  command->add_option("--size", options->size, "Width and height in pixels")->expected(2)->check(CLI::Range(1, 16384));
+  command->add_option("--azimuth", options->camera.azimuth_degrees, "Camera angle around the z axis, degrees (default 35)");
+  command->add_option("--elevation", options->camera.elevation_degrees, "Camera angle above the xy plane, degrees (default 25)");
+  command->add_option("--zoom", options->camera.zoom, "1 fits the scene; 2 is twice as close")->check(CLI::PositiveNumber);
+  command->add_flag("--pieces", options->pieces, "Colour each piece (connected part) in its own colour");
+  command->add_option("--wireframe", options->wireframe,
+                      "Draw the edges of a tet mesh over the surface: of IN when it is a mesh, or of the mesh file given")
+      ->expected(0, 1);
+  command->callback([options, command, &action] {
+    options->wireframe_given = command->count("--wireframe") > 0;
+    action = [options] {
+      if (options->out.extension() != ".png") throw Error(ErrorKind::kInvalidArgument, "the output must be a .png file", options->out.string());
+      check_not_input(options->out, options->input);
+      render::RenderOptions render_options;
+      render_options.width = options->size[0];
+      render_options.height = options->size[1];
+      render_options.camera = options->camera;
+      render_options.colour_pieces = options->pieces;
+      TriangleSurface surface;
+      std::optional<TetMesh> mesh;
+      if (file_kind(options->input) == FileKind::kTetMesh) {
+        mesh = read_tet_mesh(options->input);
+        surface = boundary_surface(*mesh);
+      } else {
+        surface = read_surface(options->input);
+      }
+      if (options->wireframe_given) {
+        if (!options->wireframe.empty() && !options->wireframe.front().empty()) {
+          mesh = read_tet_mesh(options->wireframe.front());
+        } else if (!mesh) {
+          throw Error(ErrorKind::kInvalidArgument, "--wireframe without a file needs IN to be a tet mesh", options->input.string());
+        }
+        render_options.line_points = mesh->rest();
+        render_options.lines = render::mesh_edges(*mesh);
+      }
+      const auto start = Clock::now();
+      const render::Image image = render::render(surface, render_options);
+      render::write_png(options->out, image);
+      fmt::print("rendered {} ({} triangles{}) to {} ({} x {}) in {:.2f} s\n", options->input.string(), surface.num_triangles(),
+                 options->wireframe_given ? fmt::format(", {} edges", render_options.lines.rows()) : std::string(),
+                 options->out.string(), image.width, image.height, seconds_since(start));
       return 0;
     };
   });

@@ -18,6 +18,7 @@ void add_convert_command(CLI::App& app, Action& action);
 void add_cut_command(CLI::App& app, Action& action);
 void add_embed_command(CLI::App& app, Action& action);
 void add_sim_command(CLI::App& app, Action& action);
+void add_render_command(CLI::App& app, Action& action);
 void add_demo_command(CLI::App& app, Action& action);
 
 }  // namespace tetcut::cli

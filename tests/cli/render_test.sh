@@ -1,0 +1,53 @@
+#!/usr/bin/env bash
+# tetcut render: a PNG of the size asked for, not blank, from a surface or a mesh with its
+# wireframe; clear errors for a bad output name and for a wireframe with nothing to draw.
+set -euo pipefail
+source "$(dirname "$0")/lib.sh"
+
+expect_exit 0 "$TETCUT" render --help
+expect_stdout "--wireframe"
+
+expect_exit 0 "$TETCUT" grid --cells 3 3 3 -o cube.vtu
+printf 'v -1 -1 0.4\nv 2 -1 0.4\nv 2 2 0.4\nv -1 2 0.4\nf 1 2 3\nf 1 3 4\n' > z.obj
+expect_exit 0 "$TETCUT" cut cube.vtu z.obj --out-mesh cut.vtu --out-surface cut.obj
+expect_exit 0 "$TETCUT" render cut.obj -o pieces.png --pieces --size 320 200 --azimuth 20 --elevation 30
+expect_exit 0 "$TETCUT" render cut.obj -o wire.png --wireframe cube.vtu --size 320 200
+expect_exit 0 "$TETCUT" render cube.vtu -o mesh.png --wireframe --zoom 1.5
+expect_stdout "edges"
+"$PYTHON" - pieces.png wire.png mesh.png <<'PY'
+import struct, sys, zlib
+def png(path):
+    data = open(path, "rb").read()
+    assert data[:8] == b"\x89PNG\r\n\x1a\n", path
+    width, height = struct.unpack(">II", data[16:24])
+    # Decode the image data (8-bit RGB, one filter byte per row) to count non-background pixels.
+    chunks, i = b"", 8
+    while i < len(data):
+        n, kind = struct.unpack(">I4s", data[i:i + 8])
+        if kind == b"IDAT": chunks += data[i + 8:i + 8 + n]
+        i += 12 + n
+    raw = zlib.decompress(chunks)
+    stride, rows, previous = 3 * width, [], bytearray(3 * width)
+    for y in range(height):
+        f, line = raw[y * (stride + 1)], bytearray(raw[y * (stride + 1) + 1:(y + 1) * (stride + 1)])
+        for x in range(stride):
+            a = line[x - 3] if x >= 3 else 0
+            b, c = previous[x], previous[x - 3] if x >= 3 else 0
+            if f == 1: line[x] = (line[x] + a) & 255
+            elif f == 2: line[x] = (line[x] + b) & 255
+            elif f == 3: line[x] = (line[x] + (a + b) // 2) & 255
+            elif f == 4:
+                p = a + b - c; pa, pb, pc = abs(p - a), abs(p - b), abs(p - c)
+                line[x] = (line[x] + (a if pa <= pb and pa <= pc else b if pb <= pc else c)) & 255
+        rows.append(line); previous = line
+    covered = sum(1 for row in rows for x in range(0, stride, 3) if tuple(row[x:x + 3]) != (242, 242, 242))
+    return width, height, covered / (width * height)
+w, h, covered = png(sys.argv[1]); assert (w, h) == (320, 200) and covered > 0.1, (w, h, covered)
+w, h, covered = png(sys.argv[2]); assert (w, h) == (320, 200) and covered > 0.1
+w, h, covered = png(sys.argv[3]); assert (w, h) == (800, 600) and covered > 0.1
+PY
+expect_exit 2 "$TETCUT" render cut.obj -o picture.jpg
+expect_stderr "must be a .png"
+expect_exit 2 "$TETCUT" render cut.obj -o x.png --wireframe
+expect_stderr "needs IN to be a tet mesh"
+echo "render CLI: all checks passed"
