@@ -3,7 +3,7 @@
 //
 //   tet meshes  .mesh (Medit, ASCII)   .msh (Gmsh 2.2 / 4.1, ASCII)   .node/.ele (TetGen)
 //               .vtu (VTK XML: ascii, base64, appended raw, zlib)   .vtk (legacy VTK, ASCII/binary)
-//   surfaces    .obj   .off   .ply (ASCII / binary)   .stl (ASCII / binary)
+//   surfaces    .obj   .off   .ply (ASCII / binary)   .stl (ASCII / binary)   .vtp (VTK XML PolyData)
 //
 // Readers throw tetcut::Error naming the file, the line (text formats) and the problem. Writers
 // write to a temporary file beside the target and rename it into place when complete.
@@ -65,9 +65,6 @@ void write_tet_mesh(const std::filesystem::path& path, const TetMesh& mesh, cons
 TriangleSurface read_surface(const std::filesystem::path& path);
 void write_surface(const std::filesystem::path& path, const TriangleSurface& surface,
                    const SurfaceWriteOptions& options = {});
-
-/// Writes a surface as VTK XML PolyData (.vtp), which ParaView reads in .pvd series; write only.
-void write_vtk_polydata(const std::filesystem::path& path, const TriangleSurface& surface);
 
 /// Writes text to `path` through a temporary file renamed into place, like every writer here.
 void write_text_file(const std::filesystem::path& path, std::string_view text);

@@ -1,5 +1,7 @@
 #include "connectivity/tet_copies.hpp"
 
+#include "util/union_find.hpp"
+
 #include <algorithm>
 #include <numeric>
 #include <stdexcept>
@@ -19,22 +21,6 @@ int local_index(const Tets& tets, Index tet, Index node) {
   return -1;
 }
 
-class UnionFind {
- public:
-  explicit UnionFind(std::size_t n) : parent_(n) { std::iota(parent_.begin(), parent_.end(), Index{0}); }
-  Index find(Index x) {
-    while (parent_[x] != x) x = parent_[x] = parent_[parent_[x]];
-    return x;
-  }
-  void join(Index a, Index b) {
-    a = find(a);
-    b = find(b);
-    if (a != b) parent_[std::max(a, b)] = std::min(a, b);  // the smaller id stays the root
-  }
-
- private:
-  std::vector<Index> parent_;
-};
 
 // Calls join(copy_a, copy_b) for each pair of copies that face `face` joins: through each uncovered
 // facet with material on both sides, or through the whole face between two unrefined tets.

@@ -11,6 +11,7 @@
 
 #include "geometry/predicates.hpp"
 #include "mesh/surface_checks.hpp"
+#include "util/union_find.hpp"
 
 namespace tetcut {
 namespace {
@@ -53,12 +54,7 @@ SurfaceCheck check_surface(const TriangleSurface& surface) {
   };
   std::vector<DirectedEdge> edges;
   edges.reserve(3 * static_cast<std::size_t>(surface.num_triangles()));
-  std::vector<Index> parent(static_cast<std::size_t>(surface.num_vertices()));
-  std::iota(parent.begin(), parent.end(), Index{0});
-  const auto find = [&](Index x) {
-    while (parent[x] != x) x = parent[x] = parent[parent[x]];
-    return x;
-  };
+  UnionFind vertex_classes(static_cast<std::size_t>(surface.num_vertices()));
   for (Index t = 0; t < surface.num_triangles(); ++t) {
     std::array<Index, 3> v;
     std::array<Vec3, 3> x;
@@ -71,8 +67,7 @@ SurfaceCheck check_surface(const TriangleSurface& surface) {
       const Index a = v[k], b = v[(k + 1) % 3];
       if (a == b) continue;
       edges.push_back({std::min(a, b), std::max(a, b), a < b ? 1 : -1});
-      const Index ra = find(a), rb = find(b);
-      if (ra != rb) parent[std::max(ra, rb)] = std::min(ra, rb);
+      vertex_classes.join(a, b);
     }
   }
   std::sort(edges.begin(), edges.end(),
@@ -98,7 +93,7 @@ SurfaceCheck check_surface(const TriangleSurface& surface) {
     for (int k = 0; k < 3; ++k) used[id[surface.triangles(t, k)]] = 1;
   }
   for (Index v = 0; v < surface.num_vertices(); ++v) {
-    if (used[v] && find(v) == v) ++check.components;
+    if (used[v] && vertex_classes.find(v) == v) ++check.components;
   }
   return check;
 }

@@ -39,7 +39,8 @@ void write_tetgen_ele(std::ostream& out, const Tets& tets);
 
 TetMeshData read_vtu(std::string_view bytes, const std::string& source);
 void write_vtu(std::ostream& out, const Points& points, const Tets& tets, const std::vector<CellField>& fields);
-/// VTK XML PolyData: a triangle surface, for ParaView (write only).
+/// VTK XML PolyData: a triangle surface (polygons read as fans).
+TriangleSurface read_vtp(std::string_view bytes, const std::string& source);
 void write_vtp(std::ostream& out, const Points& points, const Triangles& triangles);
 
 TetMeshData read_vtk_legacy(std::string_view bytes, const std::string& source);

@@ -8,7 +8,7 @@ namespace tetcut {
 namespace {
 
 constexpr const char* kTetMeshExtensions[] = {".mesh", ".msh", ".node", ".ele", ".vtu", ".vtk"};
-constexpr const char* kSurfaceExtensions[] = {".obj", ".off", ".ply", ".stl"};
+constexpr const char* kSurfaceExtensions[] = {".obj", ".off", ".ply", ".stl", ".vtp"};
 
 std::string join(const char* const* begin, const char* const* end) {
   std::string out;
@@ -162,13 +162,8 @@ TriangleSurface read_surface(const std::filesystem::path& path) {
   if (ext == ".off") surface = io::read_off(bytes, source);
   if (ext == ".ply") surface = io::read_ply(bytes, source);
   if (ext == ".stl") surface = io::read_stl(bytes, source);
+  if (ext == ".vtp") surface = io::read_vtp(bytes, source);
   return surface;
-}
-
-void write_vtk_polydata(const std::filesystem::path& path, const TriangleSurface& surface) {
-  io::AtomicOutput out(path, true);
-  io::write_vtp(out.stream(), surface.vertices, surface.triangles);
-  out.commit();
 }
 
 void write_surface(const std::filesystem::path& path, const TriangleSurface& surface, const SurfaceWriteOptions& options) {
@@ -179,6 +174,7 @@ void write_surface(const std::filesystem::path& path, const TriangleSurface& sur
   if (ext == ".off") io::write_off(out.stream(), surface);
   if (ext == ".ply") io::write_ply(out.stream(), surface, options.binary);
   if (ext == ".stl") io::write_stl(out.stream(), surface, options.binary);
+  if (ext == ".vtp") io::write_vtp(out.stream(), surface.vertices, surface.triangles);
   out.commit();
 }
 

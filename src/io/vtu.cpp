@@ -1,4 +1,4 @@
-// VTK XML unstructured grid (.vtu). Reads every encoding VTK and ParaView write: ascii, inline
+// VTK XML unstructured grid (.vtu) and polygon data (.vtp, surfaces). Reads every encoding VTK and ParaView write: ascii, inline
 // base64 ("binary"), appended raw or base64, each optionally zlib-compressed, with 32- or 64-bit
 // headers and either byte order. Tetrahedra (VTK cell type 10) are kept, other cells skipped.
 // Writes inline base64 with 64-bit headers, uncompressed.
@@ -37,8 +37,14 @@ class VtuReader {
   VtuReader(std::string_view bytes, std::string source) : bytes_(bytes), source_(std::move(source)) {}
 
   TetMeshData read();
+  /// A VTK XML PolyData file's polygons (.vtp), split into fans of triangles.
+  TriangleSurface read_polydata();
 
  private:
+  // Parses the XML (keeping appended data aside), checks the file type and reads the encoding
+  // attributes; returns the <UnstructuredGrid> or <PolyData> element.
+  pugi::xml_node open(pugi::xml_document* doc, const char* type);
+  std::vector<double> point_coordinates(const pugi::xml_node& piece, std::int64_t num_points);
   [[noreturn]] void fail(const std::string& message, std::ptrdiff_t offset = -1) const {
     std::int64_t line = 0;
     if (offset >= 0) line = 1 + std::count(bytes_.begin(), bytes_.begin() + offset, '\n');
@@ -182,7 +188,7 @@ std::vector<T> VtuReader::values(const pugi::xml_node& array, std::int64_t expec
   return out;
 }
 
-TetMeshData VtuReader::read() {
+pugi::xml_node VtuReader::open(pugi::xml_document* doc, const char* type) {
   // Appended raw data is not XML; parse only what precedes it.
   xml_text_ = bytes_;
   std::string xml_copy;
@@ -199,14 +205,12 @@ TetMeshData VtuReader::read() {
     xml_copy = std::string(bytes_.substr(0, appended_tag)) + "</VTKFile>";
     xml_text_ = xml_copy;
   }
-  pugi::xml_document doc;
-  const pugi::xml_parse_result parsed = doc.load_buffer(xml_text_.data(), xml_text_.size());
+  const pugi::xml_parse_result parsed = doc->load_buffer(xml_text_.data(), xml_text_.size());
   if (!parsed) fail(std::string("not valid XML: ") + parsed.description(), parsed.offset);
-  const pugi::xml_node file = doc.child("VTKFile");
+  const pugi::xml_node file = doc->child("VTKFile");
   if (!file) fail("no <VTKFile> element");
-  if (std::string(file.attribute("type").as_string()) != "UnstructuredGrid") {
-    fail("VTKFile type is '" + std::string(file.attribute("type").as_string()) + "', expected UnstructuredGrid",
-         offset_of(file));
+  if (std::string(file.attribute("type").as_string()) != type) {
+    fail("VTKFile type is '" + std::string(file.attribute("type").as_string()) + "', expected " + type, offset_of(file));
   }
   order_ = std::string(file.attribute("byte_order").as_string("LittleEndian")) == "BigEndian" ? ByteOrder::kBig
                                                                                             : ByteOrder::kLittle;
@@ -216,8 +220,27 @@ TetMeshData VtuReader::read() {
   if (compressed_ && compressor != "vtkZLibDataCompressor") {
     throw Error(ErrorKind::kUnsupported, "compressor " + compressor + " is not supported (zlib is)", source_);
   }
-  const pugi::xml_node grid = file.child("UnstructuredGrid");
-  if (!grid) fail("no <UnstructuredGrid> element", offset_of(file));
+  const pugi::xml_node grid = file.child(type);
+  if (!grid) fail(std::string("no <") + type + "> element", offset_of(file));
+  return grid;
+}
+
+std::vector<double> VtuReader::point_coordinates(const pugi::xml_node& piece, std::int64_t num_points) {
+  const pugi::xml_node points = piece.child("Points").child("DataArray");
+  if (!points) fail("Piece has no <Points> DataArray", offset_of(piece));
+  if (points.attribute("NumberOfComponents").as_int(1) != 3) fail("Points must have 3 components", offset_of(points));
+  std::vector<double> coords = values<double>(points, num_points * 3);
+  for (std::size_t i = 0; i < coords.size(); ++i) {
+    if (!std::isfinite(coords[i])) {
+      fail("point " + std::to_string(i / 3 + 1) + " has a coordinate that is not a finite number", offset_of(points));
+    }
+  }
+  return coords;
+}
+
+TetMeshData VtuReader::read() {
+  pugi::xml_document doc;
+  const pugi::xml_node grid = open(&doc, "UnstructuredGrid");
 
   TetMeshData data;
   std::vector<double> xyz;
@@ -226,15 +249,7 @@ TetMeshData VtuReader::read() {
     const std::int64_t num_points = piece.attribute("NumberOfPoints").as_llong(-1);
     const std::int64_t num_cells = piece.attribute("NumberOfCells").as_llong(-1);
     if (num_points < 0 || num_cells < 0) fail("Piece lacks NumberOfPoints or NumberOfCells", offset_of(piece));
-    const pugi::xml_node points = piece.child("Points").child("DataArray");
-    if (!points) fail("Piece has no <Points> DataArray", offset_of(piece));
-    if (points.attribute("NumberOfComponents").as_int(1) != 3) fail("Points must have 3 components", offset_of(points));
-    const std::vector<double> coords = values<double>(points, num_points * 3);
-    for (std::size_t i = 0; i < coords.size(); ++i) {
-      if (!std::isfinite(coords[i])) {
-        fail("point " + std::to_string(i / 3 + 1) + " has a coordinate that is not a finite number", offset_of(points));
-      }
-    }
+    const std::vector<double> coords = point_coordinates(piece, num_points);
     const Index base = static_cast<Index>(xyz.size() / 3);
     xyz.insert(xyz.end(), coords.begin(), coords.end());
 
@@ -279,6 +294,59 @@ TetMeshData VtuReader::read() {
   return data;
 }
 
+TriangleSurface VtuReader::read_polydata() {
+  pugi::xml_document doc;
+  const pugi::xml_node poly = open(&doc, "PolyData");
+  std::vector<double> xyz;
+  std::vector<Index> corners;
+  for (const pugi::xml_node& piece : poly.children("Piece")) {
+    const std::int64_t num_points = piece.attribute("NumberOfPoints").as_llong(-1);
+    const std::int64_t num_polys = piece.attribute("NumberOfPolys").as_llong(0);
+    if (num_points < 0) fail("Piece lacks NumberOfPoints", offset_of(piece));
+    const std::vector<double> coords = point_coordinates(piece, num_points);
+    const Index base = static_cast<Index>(xyz.size() / 3);
+    xyz.insert(xyz.end(), coords.begin(), coords.end());
+    if (num_polys == 0) continue;
+    pugi::xml_node connectivity, offsets;
+    for (const pugi::xml_node& array : piece.child("Polys").children("DataArray")) {
+      const std::string name = array.attribute("Name").as_string();
+      if (name == "connectivity") connectivity = array;
+      if (name == "offsets") offsets = array;
+    }
+    if (!connectivity || !offsets) fail("Polys must hold connectivity and offsets arrays", offset_of(piece));
+    const auto conn = values<std::int64_t>(connectivity, -1);
+    const auto offs = values<std::int64_t>(offsets, num_polys);
+    std::int64_t start = 0;
+    for (std::int64_t c = 0; c < num_polys; ++c) {
+      const std::int64_t end = offs[static_cast<std::size_t>(c)];
+      if (end < start + 3 || end > static_cast<std::int64_t>(conn.size())) {
+        fail("polygon " + std::to_string(c + 1) + " has fewer than 3 points or an offset out of range", offset_of(offsets));
+      }
+      for (std::int64_t k = start; k < end; ++k) {
+        const std::int64_t id = conn[static_cast<std::size_t>(k)];
+        if (id < 0 || id >= num_points) {
+          fail("polygon " + std::to_string(c + 1) + " refers to point " + std::to_string(id) + ", but the piece has " +
+                   std::to_string(num_points) + " points (numbered from 0)",
+               offset_of(connectivity));
+        }
+      }
+      // A fan around the first corner.
+      for (std::int64_t k = start + 1; k + 1 < end; ++k) {
+        for (const std::int64_t id : {conn[static_cast<std::size_t>(start)], conn[static_cast<std::size_t>(k)],
+                                      conn[static_cast<std::size_t>(k + 1)]}) {
+          corners.push_back(base + static_cast<Index>(id));
+        }
+      }
+      start = end;
+    }
+  }
+  TriangleSurface surface;
+  surface.vertices = to_points(xyz);
+  surface.triangles.resize(static_cast<Index>(corners.size() / 3), 3);
+  for (std::size_t i = 0; i < corners.size(); ++i) surface.triangles(static_cast<Index>(i / 3), static_cast<int>(i % 3)) = corners[i];
+  return surface;
+}
+
 void write_binary_array(std::ostream& out, const char* type, const char* name, int components, const std::string& bytes) {
   out << "<DataArray type=\"" << type << "\" Name=\"" << name << "\"";
   if (components != 1) out << " NumberOfComponents=\"" << components << "\"";
@@ -315,6 +383,7 @@ void write_connectivity(std::ostream& out, const Cells& cells) {
 }  // namespace
 
 TetMeshData read_vtu(std::string_view bytes, const std::string& source) { return VtuReader(bytes, source).read(); }
+TriangleSurface read_vtp(std::string_view bytes, const std::string& source) { return VtuReader(bytes, source).read_polydata(); }
 
 void write_vtu(std::ostream& out, const Points& points, const Tets& tets, const std::vector<CellField>& fields) {
   out << "<?xml version=\"1.0\"?>\n"

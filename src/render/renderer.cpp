@@ -8,6 +8,8 @@
 #include <EGL/eglext.h>
 #include <GLES3/gl3.h>
 
+#include "util/union_find.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <numbers>
@@ -156,22 +158,14 @@ void upload(const std::vector<Vertex>& vertices) {
 }  // namespace
 
 std::vector<Index> surface_pieces(const TriangleSurface& surface) {
-  std::vector<Index> parent(static_cast<std::size_t>(surface.num_vertices()));
-  std::iota(parent.begin(), parent.end(), Index{0});
-  const auto find = [&](Index x) {
-    while (parent[x] != x) x = parent[x] = parent[parent[x]];
-    return x;
-  };
+  UnionFind classes(static_cast<std::size_t>(surface.num_vertices()));
   for (Index t = 0; t < surface.num_triangles(); ++t) {
-    for (int k = 1; k < 3; ++k) {
-      const Index a = find(surface.triangles(t, 0)), b = find(surface.triangles(t, k));
-      if (a != b) parent[std::max(a, b)] = std::min(a, b);
-    }
+    for (int k = 1; k < 3; ++k) classes.join(surface.triangles(t, 0), surface.triangles(t, k));
   }
-  std::vector<Index> number(parent.size(), -1), pieces(static_cast<std::size_t>(surface.num_triangles()));
+  std::vector<Index> number(static_cast<std::size_t>(surface.num_vertices()), -1), pieces(static_cast<std::size_t>(surface.num_triangles()));
   Index count = 0;
   for (Index t = 0; t < surface.num_triangles(); ++t) {
-    Index& n = number[find(surface.triangles(t, 0))];
+    Index& n = number[classes.find(surface.triangles(t, 0))];
     if (n < 0) n = count++;
     pieces[t] = n;
   }

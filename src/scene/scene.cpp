@@ -481,7 +481,7 @@ SceneSummary run_scene(const Scene& scene, const std::filesystem::path& director
       TriangleSurface surface = result.surface.surface;
       surface.vertices = result.surface.positions(result.mesh, sim.positions());
       std::snprintf(name, sizeof name, "surface_%04d.vtp", frame);
-      write_vtk_polydata(directory / name, surface);
+      write_surface(directory / name, surface);
     }
     times.push_back(t);
     if (scene.write_mesh) write_series(directory / "mesh.pvd", "mesh", ".vtu", times);

@@ -128,7 +128,37 @@ TEST_P(SurfaceRoundTrip, ReadsBackExactly) {
 INSTANTIATE_TEST_SUITE_P(Formats, SurfaceRoundTrip,
                          ::testing::Values(std::make_tuple("s.obj", false), std::make_tuple("s.off", false),
                                            std::make_tuple("s.ply", false), std::make_tuple("s.ply", true),
-                                           std::make_tuple("s.stl", false)));
+                                           std::make_tuple("s.stl", false), std::make_tuple("s.vtp", false)));
+
+TEST(SurfaceIo, VtpPolygonsBecomeFansAndBadIdsAreRefused) {
+  // A quad and a triangle, as ParaView writes them: ascii arrays, 32-bit headers.
+  TempDir dir;
+  const std::string vtp = R"(<?xml version="1.0"?>
+<VTKFile type="PolyData" version="0.1" byte_order="LittleEndian">
+<PolyData><Piece NumberOfPoints="5" NumberOfPolys="2">
+<Points><DataArray type="Float32" NumberOfComponents="3" format="ascii">0 0 0 1 0 0 1 1 0 0 1 0 0.5 0.5 1</DataArray></Points>
+<Polys><DataArray type="Int32" Name="connectivity" format="ascii">0 1 2 3 0 1 4</DataArray>
+<DataArray type="Int32" Name="offsets" format="ascii">4 7</DataArray></Polys>
+</Piece></PolyData></VTKFile>
+)";
+  write_text_file(dir / "q.vtp", vtp);
+  const TriangleSurface s = read_surface(dir / "q.vtp");
+  ASSERT_EQ(s.num_triangles(), 3);
+  EXPECT_EQ(s.num_vertices(), 5);
+  EXPECT_EQ(s.triangles.row(0), Eigen::RowVector3i(0, 1, 2));
+  EXPECT_EQ(s.triangles.row(1), Eigen::RowVector3i(0, 2, 3));
+  EXPECT_EQ(s.triangles.row(2), Eigen::RowVector3i(0, 1, 4));
+  std::string bad = vtp;
+  bad.replace(bad.find("0 1 4"), 5, "0 1 9");
+  write_text_file(dir / "bad.vtp", bad);
+  try {
+    read_surface(dir / "bad.vtp");
+    FAIL() << "a polygon with a missing point was read";
+  } catch (const Error& e) {
+    EXPECT_NE(e.message().find("refers to point 9"), std::string::npos) << e.message();
+    EXPECT_EQ(e.line(), 5);  // the connectivity array
+  }
+}
 
 TEST(SurfaceIo, BinaryStlKeepsSinglePrecisionCoordinatesAndWeldsCorners) {
   TempDir dir;
