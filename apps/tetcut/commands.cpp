@@ -669,6 +669,7 @@ void add_sim_command(CLI::App& app, Action& action) {
     fs::path scene;
     fs::path out;
     int frames = -1;
+    bool png = false;
   };
   auto options = std::make_shared<Options>();
   CLI::App* command = app.add_subcommand(
@@ -678,6 +679,9 @@ void add_sim_command(CLI::App& app, Action& action) {
   command->add_option("-o,--out", options->out, "Output directory (created)")->required();
   command->add_option("--frames", options->frames, "Stop after this many output frames (a quick look)")
       ->check(CLI::NonNegativeNumber);
+  command->add_flag("--png", options->png,
+                    "Also render each frame's surface to frame_NNNN.png (pieces coloured; the camera frames the "
+                    "first frame, grown by half)");
   command->callback([options, &action] {
     action = [options] {
       const Scene scene = load_scene(options->scene);
@@ -692,6 +696,21 @@ void add_sim_command(CLI::App& app, Action& action) {
         fmt::print(stderr, "\r[{}{}] frame {}/{}  {:.1f} s", std::string(static_cast<std::size_t>(filled), '#'),
                    std::string(static_cast<std::size_t>(width - filled), ' '), frame, total, seconds_since(start));
       };
+      Eigen::AlignedBox3d frame_box;
+      if (options->png) {
+        run.frame_surface = [&](int frame, const TriangleSurface& surface) {
+          if (frame_box.isEmpty()) {
+            for (Index v = 0; v < surface.num_vertices(); ++v) frame_box.extend(surface.vertices.row(v).transpose());
+            const Vec3 grow = 0.25 * frame_box.sizes();
+            frame_box = Eigen::AlignedBox3d(frame_box.min() - grow, frame_box.max() + grow);
+          }
+          render::RenderOptions render_options;
+          render_options.width = 640;
+          render_options.height = 480;
+          render_options.frame = frame_box;
+          render::write_png(options->out / fmt::format("frame_{:04d}.png", frame), render::render(surface, render_options));
+        };
+      }
       const SceneSummary summary = run_scene(scene, options->out, run);
       if (terminal) fmt::print(stderr, "\n");
       fmt::print("simulated {} ({} s in {} steps)\n", options->scene.string(), summary.simulated_seconds, summary.steps);

@@ -32,6 +32,9 @@ struct RenderOptions {
   /// of `line_points`.
   Points line_points;
   Edges lines;
+  /// The region to frame; empty: the scene's own bounds. Frames of an animation share one so the
+  /// camera holds still.
+  Eigen::AlignedBox3d frame;
   /// Smoothing of edges by multisampling (samples per pixel; 1 for none).
   int samples = 4;
 };

@@ -98,6 +98,8 @@ struct SceneRunOptions {
   int max_frames = -1;  ///< stop after this many output frames (after frame 0); -1: run to the end
   /// Called after each output frame with (frame, frames expected).
   std::function<void(int, int)> progress;
+  /// Called with each output frame's material surface (e.g. to render it).
+  std::function<void(int, const TriangleSurface&)> frame_surface;
 };
 
 struct SceneSummary {

@@ -199,9 +199,11 @@ Image render(const TriangleSurface& surface, const RenderOptions& options) {
     throw Error(ErrorKind::kInvalidArgument, "image size must be from 1 to 16384 pixels each way");
   }
   // The scene's bounding sphere frames the view.
-  Eigen::AlignedBox3d box;
-  for (Index v = 0; v < surface.num_vertices(); ++v) box.extend(surface.vertices.row(v).transpose());
-  for (Index v = 0; v < options.line_points.rows(); ++v) box.extend(options.line_points.row(v).transpose());
+  Eigen::AlignedBox3d box = options.frame;
+  if (box.isEmpty()) {
+    for (Index v = 0; v < surface.num_vertices(); ++v) box.extend(surface.vertices.row(v).transpose());
+    for (Index v = 0; v < options.line_points.rows(); ++v) box.extend(options.line_points.row(v).transpose());
+  }
   if (box.isEmpty()) box.extend(Vec3::Zero());
   const Vec3 centre = box.center();
   const double radius = std::max(0.5 * box.diagonal().norm(), 1e-12);

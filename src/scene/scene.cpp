@@ -477,11 +477,12 @@ SceneSummary run_scene(const Scene& scene, const std::filesystem::path& director
       std::snprintf(name, sizeof name, "mesh_%04d.vtu", frame);
       write_tet_mesh(directory / name, mesh, write);
     }
-    if (scene.write_surface) {
+    if (scene.write_surface || options.frame_surface) {
       TriangleSurface surface = result.surface.surface;
       surface.vertices = result.surface.positions(result.mesh, sim.positions());
       std::snprintf(name, sizeof name, "surface_%04d.vtp", frame);
-      write_surface(directory / name, surface);
+      if (scene.write_surface) write_surface(directory / name, surface);
+      if (options.frame_surface) options.frame_surface(frame, surface);
     }
     times.push_back(t);
     if (scene.write_mesh) write_series(directory / "mesh.pvd", "mesh", ".vtu", times);

@@ -46,6 +46,20 @@ w, h, covered = png(sys.argv[1]); assert (w, h) == (320, 200) and covered > 0.1,
 w, h, covered = png(sys.argv[2]); assert (w, h) == (320, 200) and covered > 0.1
 w, h, covered = png(sys.argv[3]); assert (w, h) == (800, 600) and covered > 0.1
 PY
+# tetcut sim --png renders each output frame with a camera that holds still.
+cat > drop.json <<'JSON'
+{"mesh": {"grid": {"box": [0, 0, 0.1, 1, 1, 1.1], "cells": [2, 2, 2]}},
+ "time": {"dt": 0.01, "duration": 0.1, "output_every": 0.05},
+ "obstacles": [{"plane": {"point": [0, 0, 0], "normal": [0, 0, 1]}}]}
+JSON
+expect_exit 0 "$TETCUT" sim drop.json -o frames --png
+for f in 0 1 2; do
+  "$PYTHON" -c "import struct,sys; d=open(sys.argv[1],'rb').read(); assert d[:8]==b'\x89PNG\r\n\x1a\n' and struct.unpack('>II', d[16:24])==(640, 480)" \
+    frames/frame_000$f.png || fail "frame $f's picture is missing or the wrong size"
+done
+[[ ! -e frames/frame_0003.png ]] || fail "a picture beyond the last frame"
+cmp -s frames/frame_0000.png frames/frame_0002.png && fail "the falling block looks the same in every frame"
+
 expect_exit 2 "$TETCUT" render cut.obj -o picture.jpg
 expect_stderr "must be a .png"
 expect_exit 2 "$TETCUT" render cut.obj -o x.png --wireframe
