@@ -142,19 +142,15 @@ void check_surface_output(const fs::path& path) {
 }
 
 // Per-copy data a viewer can colour by: the input tet, the piece, and the material it holds.
-TetMeshWriteOptions cut_mesh_write_options(const CutMesh& cut, const TetMesh& input, TetMeshWriteOptions options) {
+TetMeshWriteOptions cut_mesh_write_options(const CutMesh& cut, TetMeshWriteOptions options) {
   const Index n = cut.mesh.num_tets();
   CellField original{"original_tet", {}, true}, piece{"piece", {}, true}, volume{"material_volume", {}, false},
       fraction{"material_fraction", {}, false};
+  fraction.values = cut.material_fractions();
   for (Index c = 0; c < n; ++c) {
-    const Index t = cut.tet_parent[c];
-    const auto& p = input.rest();
-    const auto& tets = input.tets();
-    const double whole = signed_volume(p.row(tets(t, 0)), p.row(tets(t, 1)), p.row(tets(t, 2)), p.row(tets(t, 3)));
-    original.values.push_back(t);
+    original.values.push_back(cut.tet_parent[c]);
     piece.values.push_back(cut.tet_piece[c]);
     volume.values.push_back(cut.tet_material_volume[c]);
-    fraction.values.push_back(cut.tet_material_volume[c] / whole);
   }
   options.cell_fields = {std::move(original), std::move(piece), std::move(volume), std::move(fraction)};
   options.tet_labels = cut.tet_piece;
@@ -217,7 +213,7 @@ struct RunSummary {
 void write_and_report(const TetMesh& mesh, const CutResult& result, const CutOutputs& outputs, const RunSummary& run) {
   auto start = Clock::now();
   if (!outputs.mesh.empty()) {
-    TetMeshWriteOptions options = cut_mesh_write_options(result.mesh, mesh, outputs.mesh_options);
+    TetMeshWriteOptions options = cut_mesh_write_options(result.mesh, outputs.mesh_options);
     options.current_positions = outputs.deformed;
     write_tet_mesh(outputs.mesh, result.mesh.mesh, options);
   }

@@ -44,6 +44,9 @@ struct CutMesh {
   std::vector<double> piece_volumes;        ///< per piece, largest first
 
   Index num_pieces() const { return static_cast<Index>(piece_volumes.size()); }
+  /// Per copy: the fraction of its tet's volume that is material (tet_material_volume over the
+  /// copy's rest volume), what a simulator scales the copy's mass and stiffness by. O(copies).
+  std::vector<double> material_fractions() const;
 };
 
 /// The boundary of the material: both sides of every cut and the uncut outer boundary, as

@@ -297,6 +297,16 @@ CutResult Cutter::result() {
   return result;
 }
 
+std::vector<double> CutMesh::material_fractions() const {
+  std::vector<double> fraction(static_cast<std::size_t>(mesh.num_tets()));
+  const Points& p = mesh.rest();
+  const Tets& t = mesh.tets();
+  for (Index c = 0; c < mesh.num_tets(); ++c) {
+    fraction[c] = tet_material_volume[c] / signed_volume(p.row(t(c, 0)), p.row(t(c, 1)), p.row(t(c, 2)), p.row(t(c, 3)));
+  }
+  return fraction;
+}
+
 Points MaterialSurface::positions(const CutMesh& mesh, const Points& nodes) const {
   Points p(surface.num_vertices(), 3);
   const Tets& tets = mesh.mesh.tets();

@@ -369,14 +369,10 @@ Scene load_scene(const std::filesystem::path& path) {
 
 namespace {
 
+// The simulator's volume fractions: the cut mesh's, at most 1 (a rounding above it is not material).
 std::vector<double> material_fractions(const CutMesh& mesh) {
-  std::vector<double> fraction(static_cast<std::size_t>(mesh.mesh.num_tets()));
-  const Points& p = mesh.mesh.rest();
-  const Tets& t = mesh.mesh.tets();
-  for (Index c = 0; c < mesh.mesh.num_tets(); ++c) {
-    const double whole = signed_volume(p.row(t(c, 0)), p.row(t(c, 1)), p.row(t(c, 2)), p.row(t(c, 3)));
-    fraction[c] = std::min(1.0, mesh.tet_material_volume[c] / whole);
-  }
+  std::vector<double> fraction = mesh.material_fractions();
+  for (double& f : fraction) f = std::min(f, 1.0);
   return fraction;
 }
 
@@ -460,22 +456,23 @@ SceneSummary run_scene(const Scene& scene, const std::filesystem::path& director
   const int expected_frames = steps / every;
   std::vector<double> times;
   SceneSummary summary;
+  // What a frame's mesh file carries per tet changes only with the mesh: set after each cut.
+  TetMeshWriteOptions mesh_fields;
+  mesh_fields.current_positions = true;
+  const auto refresh_mesh_fields = [&] {
+    CellField piece{"piece", {}, true}, fraction{"material_fraction", {}, false};
+    piece.values.assign(result.mesh.tet_piece.begin(), result.mesh.tet_piece.end());
+    fraction.values = fractions;
+    mesh_fields.cell_fields = {std::move(piece), std::move(fraction)};
+  };
+  refresh_mesh_fields();
   const auto write_frame = [&](double t) {
     const int frame = static_cast<int>(times.size());
     char name[64];
     if (scene.write_mesh) {
-      TetMesh mesh = result.mesh.mesh;
-      mesh.set_current(sim.positions());
-      TetMeshWriteOptions write;
-      write.current_positions = true;
-      CellField piece{"piece", {}, true}, fraction{"material_fraction", {}, false};
-      for (Index c = 0; c < mesh.num_tets(); ++c) {
-        piece.values.push_back(result.mesh.tet_piece[c]);
-        fraction.values.push_back(fractions[c]);
-      }
-      write.cell_fields = {std::move(piece), std::move(fraction)};
+      result.mesh.mesh.set_current(sim.positions());
       std::snprintf(name, sizeof name, "mesh_%04d.vtu", frame);
-      write_tet_mesh(directory / name, mesh, write);
+      write_tet_mesh(directory / name, result.mesh.mesh, mesh_fields);
     }
     if (scene.write_surface || options.frame_surface) {
       TriangleSurface surface = result.surface.surface;
@@ -525,6 +522,7 @@ SceneSummary run_scene(const Scene& scene, const std::filesystem::path& director
       ++summary.cuts_applied;
       result = cutter.result();
       fractions = material_fractions(result.mesh);
+      refresh_mesh_fields();
       sim.remesh(result.mesh.mesh, fractions, batch.first_new_node, batch.new_node_source);
       pinned.resize(static_cast<std::size_t>(sim.num_nodes()), 0);
       for (Index i = 0; i < static_cast<Index>(batch.new_node_source.size()); ++i) {

@@ -111,12 +111,7 @@ TEST_P(Integrator, CubeCutInTwoFallsApart) {
       ASSERT_EQ(piece, cut.mesh.tet_piece[c]) << "a node is shared by both pieces";
     }
   }
-  std::vector<double> fraction(static_cast<std::size_t>(cut.mesh.mesh.num_tets()));
-  for (Index c = 0; c < cut.mesh.mesh.num_tets(); ++c) {
-    const auto& p = cut.mesh.mesh.rest();
-    const auto& t = cut.mesh.mesh.tets();
-    fraction[c] = cut.mesh.tet_material_volume[c] / signed_volume(p.row(t(c, 0)), p.row(t(c, 1)), p.row(t(c, 2)), p.row(t(c, 3)));
-  }
+  const std::vector<double> fraction = cut.mesh.material_fractions();
   Material material;
   material.model = GetParam();
   Simulator sim(cut.mesh.mesh, material, fraction);
@@ -248,12 +243,7 @@ TEST_P(Integrator, CuttingWhileFallingCarriesTheStateOver) {
   const CutBatchReport batch = cutter.cut_deformed(figures::axis_square(0, 0.43, -1, 2));
   ASSERT_GT(batch.new_node_source.size(), 0u);
   const CutResult cut = cutter.result();
-  std::vector<double> fraction(static_cast<std::size_t>(cut.mesh.mesh.num_tets()));
-  for (Index c = 0; c < cut.mesh.mesh.num_tets(); ++c) {
-    const auto& p = cut.mesh.mesh.rest();
-    const auto& t = cut.mesh.mesh.tets();
-    fraction[c] = cut.mesh.tet_material_volume[c] / signed_volume(p.row(t(c, 0)), p.row(t(c, 1)), p.row(t(c, 2)), p.row(t(c, 3)));
-  }
+  const std::vector<double> fraction = cut.mesh.material_fractions();
   sim.remesh(cut.mesh.mesh, fraction, batch.first_new_node, batch.new_node_source);
   ASSERT_EQ(sim.num_nodes(), cut.mesh.mesh.num_nodes());
   // Every node sits where the uncut cube's node it copies sits: the cube fell rigidly.
