@@ -15,6 +15,9 @@ packages=(
   # Offscreen rendering (tetcut render): EGL and OpenGL ES 3 headers, Mesa's EGL and software
   # rasteriser (no GPU needed), libpng.
   libegl-dev libgles-dev libegl-mesa0 libgl1-mesa-dri libpng-dev
+  # Animations of simulations (tetcut sim --animation), and the browser the web viewer's test
+  # runs in (headless, WebGL through its software renderer).
+  ffmpeg chromium
   # Real scanned surfaces for tests and examples (armadillo, bunny, femur, knot, lion head, ...):
   # /usr/share/doc/libcgal-dev/data.tar.gz.
   libcgal-demo
@@ -27,15 +30,25 @@ for p in "${packages[@]}"; do
   fi
 done
 
+# The web viewer is built with Node.js and npm; Debian's are used where none is installed.
+if ! command -v node > /dev/null || ! command -v npm > /dev/null; then missing+=(nodejs npm); fi
+
 if ((${#missing[@]} == 0)); then
   echo "install-deps: all ${#packages[@]} packages present"
-  exit 0
+else
+  SUDO=""
+  if [[ $(id -u) -ne 0 ]]; then SUDO="sudo"; fi
+  echo "install-deps: installing ${missing[*]}"
+  export DEBIAN_FRONTEND=noninteractive
+  $SUDO apt-get update -qq
+  $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
 fi
 
-SUDO=""
-if [[ $(id -u) -ne 0 ]]; then SUDO="sudo"; fi
-echo "install-deps: installing ${missing[*]}"
-export DEBIAN_FRONTEND=noninteractive
-$SUDO apt-get update -qq
-$SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+# The viewer's npm packages (three.js, esbuild, playwright-core), exactly as locked, when missing or
+# older than the lock file.
+viewer=$(cd "$(dirname "$0")/../viewer" && pwd)
+if [[ ! -f $viewer/node_modules/.package-lock.json || $viewer/package-lock.json -nt $viewer/node_modules/.package-lock.json ]]; then
+  echo "install-deps: npm ci in viewer/"
+  (cd "$viewer" && npm ci --no-audit --no-fund --loglevel=error)
+fi
 echo "install-deps: done"

@@ -4,6 +4,7 @@
 #include <tetcut/embed.hpp>
 #include <tetcut/render.hpp>
 #include <tetcut/scene.hpp>
+#include <tetcut/view.hpp>
 #include <tetcut/error.hpp>
 #include <tetcut/figures.hpp>
 #include <tetcut/generators.hpp>
@@ -16,6 +17,7 @@
 #include <sys/resource.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <optional>
@@ -666,6 +668,8 @@ void add_sim_command(CLI::App& app, Action& action) {
     fs::path out;
     int frames = -1;
     bool png = false;
+    fs::path animation;
+    double fps = 0;
   };
   auto options = std::make_shared<Options>();
   CLI::App* command = app.add_subcommand(
@@ -678,8 +682,20 @@ void add_sim_command(CLI::App& app, Action& action) {
   command->add_flag("--png", options->png,
                     "Also render each frame's surface to frame_NNNN.png (pieces coloured; the camera frames the "
                     "first frame, grown by half)");
+  command->add_option("--animation", options->animation,
+                      "Also assemble the frames into an animation with ffmpeg: .mp4 or .gif (implies --png)");
+  command->add_option("--fps", options->fps, "Frames per second of the animation (default: real time, 1 / output_every, "
+                                             "within 1 to 60)")
+      ->check(CLI::Range(0.1, 240.0));
   command->callback([options, &action] {
     action = [options] {
+      if (!options->animation.empty()) {
+        const std::string ext = options->animation.extension().string();
+        if (ext != ".mp4" && ext != ".gif") {
+          throw Error(ErrorKind::kInvalidArgument, "an animation must be .mp4 or .gif", options->animation.string());
+        }
+        options->png = true;
+      }
       const Scene scene = load_scene(options->scene);
       SceneRunOptions run;
       run.max_frames = options->frames;
@@ -709,6 +725,12 @@ void add_sim_command(CLI::App& app, Action& action) {
       }
       const SceneSummary summary = run_scene(scene, options->out, run);
       if (terminal) fmt::print(stderr, "\n");
+      if (!options->animation.empty()) {
+        const double every = scene.output_every > 0 ? scene.output_every : scene.step.dt;
+        const double fps = options->fps > 0 ? options->fps : std::clamp(1 / every, 1.0, 60.0);
+        render::write_animation(options->out / "frame_%04d.png", fps, options->animation);
+        fmt::print("  animation        {} ({} frames at {:g} per second)\n", options->animation.string(), summary.frames, fps);
+      }
       fmt::print("simulated {} ({} s in {} steps)\n", options->scene.string(), summary.simulated_seconds, summary.steps);
       fmt::print("  frames           {} in {}\n", summary.frames, options->out.string());
       fmt::print("  cuts             {}\n", summary.cuts_applied);
@@ -780,6 +802,46 @@ void add_render_command(CLI::App& app, Action& action) {
       fmt::print("rendered {} ({} triangles{}) to {} ({} x {}) in {:.2f} s\n", options->input.string(), surface.num_triangles(),
                  options->wireframe_given ? fmt::format(", {} edges", render_options.lines.rows()) : std::string(),
                  options->out.string(), image.width, image.height, seconds_since(start));
+      return 0;
+    };
+  });
+}
+
+void add_view_command(CLI::App& app, Action& action) {
+  struct Options {
+    fs::path input;
+    fs::path out;
+    fs::path mesh;
+    std::string title;
+  };
+  auto options = std::make_shared<Options>();
+  CLI::App* command = app.add_subcommand(
+      "view", "Write a web page that shows a result in any browser, offline (three.js inlined): orbit, colour by "
+              "piece, toggle the embedding tets, step through a simulation's frames");
+  command->add_option("IN", options->input,
+                      "A directory 'tetcut sim' wrote (its frames, with tet edges), a surface, or a tet mesh")
+      ->required();
+  command->add_option("-o,--out", options->out, "The page to write (default: IN/view.html for a directory, IN.html for a file)");
+  command->add_option("--mesh", options->mesh, "A tet mesh whose edges to show with a surface file");
+  command->add_option("--title", options->title, "The page's title (default: IN's name)");
+  command->callback([options, &action] {
+    action = [options] {
+      const fs::path& in = options->input;
+      if (!fs::exists(in)) throw Error(ErrorKind::kIo, "no such file or directory", in.string());
+      const bool directory = fs::is_directory(in);
+      fs::path out = options->out;
+      if (out.empty()) out = directory ? in / "view.html" : fs::path(in).replace_extension(".html");
+      if (out.extension() != ".html") throw Error(ErrorKind::kInvalidArgument, "the page must be a .html file", out.string());
+      if (!directory) check_not_input(out, in);
+      const auto start = Clock::now();
+      const std::vector<view::ViewFrame> frames = view::load_frames(in, options->mesh);
+      const std::string title = !options->title.empty() ? options->title
+                                : directory            ? fs::absolute(in).lexically_normal().parent_path().filename().string()
+                                                       : in.filename().string();
+      view::write_page(out, title.empty() ? in.string() : title, frames);
+      const bool edges = std::any_of(frames.begin(), frames.end(), [](const view::ViewFrame& f) { return f.mesh_edges.rows() > 0; });
+      fmt::print("wrote {} ({} frame{}{}, {:.1f} MB) in {:.2f} s; open it in a browser\n", out.string(), frames.size(),
+                 frames.size() == 1 ? "" : "s", edges ? ", with tet edges" : "", static_cast<double>(fs::file_size(out)) / 1e6, seconds_since(start));
       return 0;
     };
   });

@@ -19,6 +19,7 @@ void add_cut_command(CLI::App& app, Action& action);
 void add_embed_command(CLI::App& app, Action& action);
 void add_sim_command(CLI::App& app, Action& action);
 void add_render_command(CLI::App& app, Action& action);
+void add_view_command(CLI::App& app, Action& action);
 void add_demo_command(CLI::App& app, Action& action);
 
 }  // namespace tetcut::cli

@@ -66,6 +66,18 @@ TriangleSurface read_surface(const std::filesystem::path& path);
 void write_surface(const std::filesystem::path& path, const TriangleSurface& surface,
                    const SurfaceWriteOptions& options = {});
 
+/// One dataset of a time series (a ParaView collection, .pvd): its time and its file.
+struct SeriesEntry {
+  double time = 0;
+  std::filesystem::path file;
+};
+/// Reads a .pvd collection in file order. Each entry's file is resolved against the .pvd's folder
+/// (as ParaView does). Throws Error(kInvalidInput) naming the file and line for malformed XML, a
+/// DataSet without a file or with a timestep that is not a finite number, or no DataSet at all.
+std::vector<SeriesEntry> read_series(const std::filesystem::path& pvd);
+/// Writes a .pvd collection; files are written as given (relative to the .pvd's folder, usually).
+void write_series(const std::filesystem::path& pvd, const std::vector<SeriesEntry>& entries);
+
 /// Writes text to `path` through a temporary file renamed into place, like every writer here.
 void write_text_file(const std::filesystem::path& path, std::string_view text);
 

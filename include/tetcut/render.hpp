@@ -64,4 +64,12 @@ Edges mesh_edges(const TetMesh& mesh);
 void write_png(const std::filesystem::path& path, const Image& image);
 Image read_png(const std::filesystem::path& path);
 
+/// Assembles numbered PNG frames into an animation with ffmpeg (run as a separate program):
+/// `frames` is a printf pattern such as "out/frame_%04d.png", numbered from 0. The output's
+/// extension picks the format: .mp4 (H.264, yuv420p, playable in browsers) or .gif (with a
+/// palette made from the frames). The file appears only when ffmpeg succeeded. Throws
+/// Error(kUnsupported) when ffmpeg is not installed, Error(kInvalidArgument) for another
+/// extension or a frame rate outside (0, 240], Error(kIo) with ffmpeg's message when it fails.
+void write_animation(const std::filesystem::path& frames, double frames_per_second, const std::filesystem::path& output);
+
 }  // namespace tetcut::render

@@ -152,6 +152,20 @@ void write_text_file(const std::filesystem::path& path, std::string_view text) {
   out.commit();
 }
 
+std::vector<SeriesEntry> read_series(const std::filesystem::path& pvd) {
+  std::vector<SeriesEntry> entries = io::read_pvd(io::read_file(pvd), pvd.string());
+  for (SeriesEntry& entry : entries) {
+    if (entry.file.is_relative()) entry.file = pvd.parent_path() / entry.file;
+  }
+  return entries;
+}
+
+void write_series(const std::filesystem::path& pvd, const std::vector<SeriesEntry>& entries) {
+  io::AtomicOutput out(pvd);
+  io::write_pvd(out.stream(), entries);
+  out.commit();
+}
+
 TriangleSurface read_surface(const std::filesystem::path& path) {
   const std::string ext = io::extension_of(path);
   if (file_kind(path) != FileKind::kSurface) unknown_extension(path, "surface", supported_surface_extensions());

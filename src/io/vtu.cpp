@@ -6,6 +6,8 @@
 #include <pugixml.hpp>
 
 #include <algorithm>
+#include <cmath>
+#include <cstdlib>
 #include <cstring>
 #include <string>
 
@@ -39,6 +41,8 @@ class VtuReader {
   TetMeshData read();
   /// A VTK XML PolyData file's polygons (.vtp), split into fans of triangles.
   TriangleSurface read_polydata();
+  /// A ParaView collection's datasets (.pvd), in file order, with their paths as written.
+  std::vector<SeriesEntry> read_collection();
 
  private:
   // Parses the XML (keeping appended data aside), checks the file type and reads the encoding
@@ -380,7 +384,39 @@ void write_connectivity(std::ostream& out, const Cells& cells) {
   write_binary_array(out, "Int64", "offsets", 1, bytes);
 }
 
+std::vector<SeriesEntry> VtuReader::read_collection() {
+  pugi::xml_document doc;
+  const pugi::xml_node collection = open(&doc, "Collection");
+  std::vector<SeriesEntry> entries;
+  for (const pugi::xml_node& dataset : collection.children("DataSet")) {
+    const std::string file = dataset.attribute("file").as_string();
+    if (file.empty()) fail("DataSet has no file attribute", offset_of(dataset));
+    const std::string time_text = dataset.attribute("timestep").as_string("0");
+    char* end = nullptr;
+    const double time = std::strtod(time_text.c_str(), &end);
+    if (end == time_text.c_str() || *end != '\0' || !std::isfinite(time)) {
+      fail("DataSet timestep '" + time_text + "' is not a finite number", offset_of(dataset));
+    }
+    entries.push_back({time, file});
+  }
+  if (entries.empty()) fail("the collection has no <DataSet> elements", offset_of(collection));
+  return entries;
+}
+
 }  // namespace
+
+std::vector<SeriesEntry> read_pvd(std::string_view bytes, const std::string& source) {
+  return VtuReader(bytes, source).read_collection();
+}
+
+void write_pvd(std::ostream& out, const std::vector<SeriesEntry>& entries) {
+  out << "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"1.0\">\n<Collection>\n";
+  out.precision(17);
+  for (const SeriesEntry& entry : entries) {
+    out << "<DataSet timestep=\"" << entry.time << "\" part=\"0\" file=\"" << entry.file.generic_string() << "\"/>\n";
+  }
+  out << "</Collection>\n</VTKFile>\n";
+}
 
 TetMeshData read_vtu(std::string_view bytes, const std::string& source) { return VtuReader(bytes, source).read(); }
 TriangleSurface read_vtp(std::string_view bytes, const std::string& source) { return VtuReader(bytes, source).read_polydata(); }

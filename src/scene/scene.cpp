@@ -378,18 +378,16 @@ std::vector<double> material_fractions(const CutMesh& mesh) {
 
 bool in_box(const Box& box, const Vec3& x) { return (x.array() >= box.min.array()).all() && (x.array() <= box.max.array()).all(); }
 
-void write_series(const std::filesystem::path& path, const std::string& prefix, const std::string& extension,
-                  const std::vector<double>& times) {
-  std::ostringstream out;
-  out << "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"1.0\">\n<Collection>\n";
+// The .pvd series of one kind of output, listing frames 0 .. times.size() - 1.
+void write_frame_series(const std::filesystem::path& path, const std::string& prefix, const std::string& extension,
+                        const std::vector<double>& times) {
+  std::vector<SeriesEntry> entries;
   for (std::size_t f = 0; f < times.size(); ++f) {
     char name[64];
     std::snprintf(name, sizeof name, "%s_%04zu%s", prefix.c_str(), f, extension.c_str());
-    out.precision(17);
-    out << "<DataSet timestep=\"" << times[f] << "\" part=\"0\" file=\"" << name << "\"/>\n";
+    entries.push_back({times[f], name});
   }
-  out << "</Collection>\n</VTKFile>\n";
-  write_text_file(path, out.str());
+  write_series(path, entries);
 }
 
 }  // namespace
@@ -482,8 +480,8 @@ SceneSummary run_scene(const Scene& scene, const std::filesystem::path& director
       if (options.frame_surface) options.frame_surface(frame, surface);
     }
     times.push_back(t);
-    if (scene.write_mesh) write_series(directory / "mesh.pvd", "mesh", ".vtu", times);
-    if (scene.write_surface) write_series(directory / "surface.pvd", "surface", ".vtp", times);
+    if (scene.write_mesh) write_frame_series(directory / "mesh.pvd", "mesh", ".vtu", times);
+    if (scene.write_surface) write_frame_series(directory / "surface.pvd", "surface", ".vtp", times);
     if (options.progress) options.progress(frame, expected_frames);
   };
   write_frame(0);

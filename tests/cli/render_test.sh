@@ -60,6 +60,23 @@ done
 [[ ! -e frames/frame_0003.png ]] || fail "a picture beyond the last frame"
 cmp -s frames/frame_0000.png frames/frame_0002.png && fail "the falling block looks the same in every frame"
 
+# --animation assembles the frames with ffmpeg; ffprobe (from the same package) reads them back.
+expect_exit 0 "$TETCUT" sim drop.json -o movie --animation drop.mp4
+expect_stdout "drop.mp4 (3 frames at 20 per second)"
+[[ $(ffprobe -v error -count_frames -select_streams v:0 -show_entries stream=codec_name,width,height,nb_read_frames \
+      -of csv=p=0 drop.mp4) == "h264,640,480,3" ]] || fail "drop.mp4 is not a 640x480 H.264 video of 3 frames"
+expect_exit 0 "$TETCUT" sim drop.json -o gif --animation drop.gif --fps 5
+[[ $(ffprobe -v error -count_frames -select_streams v:0 -show_entries stream=codec_name,nb_read_frames,r_frame_rate \
+      -of csv=p=0 drop.gif) == "gif,5/1,3" ]] || fail "drop.gif is not a GIF of 3 frames at 5 per second"
+[[ -z $(ls -A | grep -E 'partial|ffmpeg.log') ]] || fail "temporary files left behind"
+expect_exit 2 "$TETCUT" sim drop.json -o avi --animation drop.avi
+expect_stderr "must be .mp4 or .gif"
+[[ ! -e avi ]] || fail "a bad animation name still ran the scene"
+# Without ffmpeg: a clear error, and no animation file.
+expect_exit 2 env PATH=/nonexistent "$TETCUT" sim drop.json -o noffmpeg --animation none.mp4
+expect_stderr "ffmpeg is not installed"
+[[ ! -e none.mp4 ]] || fail "an animation appeared without ffmpeg"
+
 expect_exit 2 "$TETCUT" render cut.obj -o picture.jpg
 expect_stderr "must be a .png"
 expect_exit 2 "$TETCUT" render cut.obj -o x.png --wireframe

@@ -170,5 +170,41 @@ TEST(SurfaceIo, BinaryStlKeepsSinglePrecisionCoordinatesAndWeldsCorners) {
   expect_same_corners(read_surface(dir / "s.stl"), s);
 }
 
+TEST(SeriesIo, ReadsBackTimesAndResolvesFilesAgainstItsFolder) {
+  TempDir dir;
+  std::filesystem::create_directories(dir / "run");
+  // Times that need all 17 digits, and one file given with an absolute path.
+  const std::vector<SeriesEntry> written = {{0.1, "a_0000.vtp"}, {1.0 / 3, "sub/a_0001.vtp"}, {2.5, dir / "elsewhere.vtp"}};
+  write_series(dir / "run" / "a.pvd", written);
+  const std::vector<SeriesEntry> read = read_series(dir / "run" / "a.pvd");
+  ASSERT_EQ(read.size(), 3u);
+  EXPECT_EQ(read[0].time, 0.1);
+  EXPECT_EQ(read[1].time, 1.0 / 3);
+  EXPECT_EQ(read[0].file, dir / "run" / "a_0000.vtp");
+  EXPECT_EQ(read[1].file, dir / "run" / "sub/a_0001.vtp");
+  EXPECT_EQ(read[2].file, dir / "elsewhere.vtp");
+}
+
+TEST(SeriesIo, MalformedCollectionsNameTheLine) {
+  TempDir dir;
+  const auto expect_error = [&](const std::string& body, const std::string& message, std::int64_t line) {
+    std::ofstream(dir / "s.pvd") << "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\">\n<Collection>\n" << body
+                                 << "</Collection>\n</VTKFile>\n";
+    try {
+      read_series(dir / "s.pvd");
+      FAIL() << "read: " << body;
+    } catch (const Error& e) {
+      EXPECT_NE(e.message().find(message), std::string::npos) << e.message();
+      EXPECT_EQ(e.line(), line) << body;
+      EXPECT_NE(std::string(e.what()).find("s.pvd"), std::string::npos) << e.what();
+    }
+  };
+  expect_error("<DataSet timestep=\"0\" file=\"a.vtp\"/>\n<DataSet timestep=\"nan\" file=\"b.vtp\"/>\n",
+               "timestep 'nan' is not a finite number", 5);
+  expect_error("<DataSet timestep=\"1\"/>\n", "DataSet has no file attribute", 4);
+  expect_error("", "no <DataSet> elements", 3);
+  expect_error("<DataSet timestep=\"1\" file=\"a.vtp\">\n", "not valid XML", 5);
+}
+
 }  // namespace
 }  // namespace tetcut

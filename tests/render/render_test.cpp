@@ -7,6 +7,9 @@
 #include <tetcut/figures.hpp>
 #include <tetcut/generators.hpp>
 #include <tetcut/render.hpp>
+#include <tetcut/view.hpp>
+
+#include <nlohmann/json.hpp>
 
 #include "support/temp_dir.hpp"
 
@@ -97,6 +100,62 @@ TEST(Render, PngRoundTripAndBadSizes) {
   options.width = 0;
   EXPECT_THROW(render(two_boxes(), options), Error);
   EXPECT_THROW(read_png(dir.path() / "missing.png"), Error);
+}
+
+// The data inside a viewer page.
+nlohmann::json page_data(const std::string& html) {
+  const std::string open = "<script id=\"tetcut-data\" type=\"application/json\">";
+  const std::size_t begin = html.find(open) + open.size();
+  return nlohmann::json::parse(html.substr(begin, html.find("</script>", begin) - begin));
+}
+
+TEST(ViewPage, SharesUnchangedTopologyAndKeepsTheMarkupIntact) {
+  ASSERT_TRUE(view::available());
+  view::ViewFrame first;
+  first.time = 0;
+  first.surface = two_boxes();
+  view::ViewFrame moved = first;
+  moved.time = 0.5;
+  moved.surface.vertices.col(2).array() += 1;
+  view::ViewFrame cut = moved;  // a third box appears: new triangles, new pieces
+  cut.surface = figures::concatenate(moved.surface, figures::box_surface(Box{Vec3(3, 0, 0), Vec3(4, 1, 1)}));
+  // A title that would end the element it sits in, unless escaped.
+  const std::string html = view::page("a </script> <b>title</b> & more", {first, moved, cut});
+  EXPECT_NE(html.find("<title>a &lt;/script&gt; &lt;b&gt;title&lt;/b&gt; &amp; more - tetcut</title>"), std::string::npos);
+  const nlohmann::json data = page_data(html);
+  EXPECT_EQ(data["title"], "a </script> <b>title</b> & more");
+  const nlohmann::json& frames = data["frames"];
+  ASSERT_EQ(frames.size(), 3u);
+  EXPECT_TRUE(frames[0]["surface"]["triangles"].is_string());
+  EXPECT_TRUE(frames[1]["surface"]["triangles"].is_null());
+  EXPECT_TRUE(frames[1]["surface"]["colours"].is_null());
+  EXPECT_TRUE(frames[2]["surface"]["triangles"].is_string());
+  EXPECT_EQ(frames[0]["surface"]["pieces"], 2);
+  EXPECT_EQ(frames[2]["surface"]["pieces"], 3);
+  EXPECT_EQ(frames[1]["time"], 0.5);
+  EXPECT_TRUE(frames[0]["mesh"].is_null());
+  // Positions are float32: 16 vertices, 12 bytes each, base64 (4 characters per 3 bytes).
+  EXPECT_EQ(frames[1]["surface"]["positions"].get<std::string>().size(), 16u * 12 / 3 * 4);
+  // The script is inline, and the page has exactly its own closing script tags.
+  EXPECT_EQ(html.find("<script src"), std::string::npos);
+  std::size_t closes = 0;
+  for (std::size_t at = html.find("</script>"); at != std::string::npos; at = html.find("</script>", at + 1)) ++closes;
+  EXPECT_EQ(closes, 2u);
+  EXPECT_THROW(view::page("empty", {}), Error);
+}
+
+TEST(ViewPage, MeshFramesCarryTheirEdges) {
+  const TetMesh mesh = make_grid(Box{Vec3(0, 0, 0), Vec3(1, 1, 1)}, {1, 1, 1}, 6);
+  view::ViewFrame frame;
+  frame.surface = boundary_surface(mesh);
+  frame.mesh_points = mesh.rest();
+  frame.mesh_edges = mesh_edges(mesh);
+  const nlohmann::json data = page_data(view::page("cube", {frame, frame}));
+  // One cube of 6 tets: 12 sides, 6 face diagonals and 1 body diagonal; 2 uint32 each, base64.
+  EXPECT_EQ(frame.mesh_edges.rows(), 19);
+  EXPECT_EQ(data["frames"][0]["mesh"]["edges"].get<std::string>().size(), (19u * 2 * 4 + 2) / 3 * 4);
+  EXPECT_EQ(data["frames"][0]["mesh"]["positions"].get<std::string>().size(), (8u * 12 + 2) / 3 * 4);
+  EXPECT_TRUE(data["frames"][1]["mesh"]["edges"].is_null());
 }
 
 }  // namespace

@@ -1,0 +1,193 @@
+// The tetcut viewer: one self-contained page written by `tetcut view`. The data (frames of a
+// material surface, each with its vertices' piece colours and optionally the embedding tet mesh's
+// edges) sits in the page as JSON with base64 arrays, so the page works offline from file://.
+//
+// For tests and scripting, window.tetcutViewer exposes the state and the same actions as the
+// controls: { ready, frameCount, frame, setFrame(i), setPieces(on), setTets(on), error }.
+
+import * as THREE from 'three';
+import { OrbitControls } from 'three/examples/jsm/controls/OrbitControls.js';
+
+const api = { ready: false, frameCount: 0, frame: 0, error: null };
+window.tetcutViewer = api;
+
+function showError(message) {
+  api.error ??= message;
+  const box = document.getElementById('error');
+  box.textContent = `tetcut viewer: ${api.error}`;
+  box.style.display = 'block';
+}
+function fail(message) {
+  showError(message);
+  throw new Error(message);
+}
+// Anything else that goes wrong (no WebGL, say) is shown on the page, not only in the console.
+window.addEventListener('error', (event) => showError(event.message));
+
+function decode(base64, Type) {
+  if (base64 == null) return null;
+  const bytes = Uint8Array.from(atob(base64), (c) => c.charCodeAt(0));
+  if (bytes.length % Type.BYTES_PER_ELEMENT !== 0) fail(`an array's length is not a whole number of ${Type.name} elements`);
+  return new Type(bytes.buffer);
+}
+
+// Frames share arrays with the frame before them when the topology did not change (null in the
+// data): resolve those references once, so every frame has its own complete description.
+function readFrames(data) {
+  if (!Array.isArray(data.frames) || data.frames.length === 0) fail('the page holds no frames');
+  const frames = [];
+  let triangles = null, colours = null, edges = null;
+  for (const [i, f] of data.frames.entries()) {
+    const positions = decode(f.surface.positions, Float32Array);
+    triangles = decode(f.surface.triangles, Uint32Array) ?? triangles;
+    colours = decode(f.surface.colours, Uint8Array) ?? colours;
+    if (!triangles || !colours) fail(`frame ${i} has no triangles`);
+    let mesh = null;
+    if (f.mesh) {
+      edges = decode(f.mesh.edges, Uint32Array) ?? edges;
+      mesh = { positions: decode(f.mesh.positions, Float32Array), edges };
+    }
+    frames.push({ time: f.time, positions, triangles, colours, pieces: f.surface.pieces, mesh });
+  }
+  return frames;
+}
+
+const data = JSON.parse(document.getElementById('tetcut-data').textContent);
+const frames = readFrames(data);
+api.frameCount = frames.length;
+document.getElementById('title').textContent = data.title ?? 'tetcut';
+
+// --- scene -----------------------------------------------------------------------------------
+const container = document.getElementById('view');
+// preserveDrawingBuffer: screenshots (and the tests) read what is on screen.
+const renderer = new THREE.WebGLRenderer({ antialias: true, preserveDrawingBuffer: true });
+renderer.setPixelRatio(window.devicePixelRatio);
+renderer.setSize(container.clientWidth, container.clientHeight);
+renderer.setClearColor(0xf2f2f2);
+container.appendChild(renderer.domElement);
+
+const scene = new THREE.Scene();
+scene.add(new THREE.HemisphereLight(0xffffff, 0x606070, 1.6));
+const sun = new THREE.DirectionalLight(0xffffff, 1.6);
+scene.add(sun);
+
+const camera = new THREE.PerspectiveCamera(35, container.clientWidth / container.clientHeight, 1e-3, 1e3);
+camera.up.set(0, 0, 1);  // tetcut's pictures and scenes are z-up
+const controls = new OrbitControls(camera, renderer.domElement);
+controls.addEventListener('change', draw);
+
+const surfaceMaterial = new THREE.MeshStandardMaterial({
+  vertexColors: true, flatShading: true, side: THREE.DoubleSide, roughness: 0.8, metalness: 0,
+  polygonOffset: true, polygonOffsetFactor: 1, polygonOffsetUnits: 1,  // tet edges stay in front
+});
+const plainColour = new THREE.Color(0xc8c8cd);
+const edgeMaterial = new THREE.LineBasicMaterial({ color: 0x303040, transparent: true, opacity: 0.45 });
+const surfaceMesh = new THREE.Mesh(new THREE.BufferGeometry(), surfaceMaterial);
+const tetLines = new THREE.LineSegments(new THREE.BufferGeometry(), edgeMaterial);
+scene.add(surfaceMesh, tetLines);
+
+// Frame the first frame's bounds (grown a little) so the camera holds still while stepping.
+{
+  const box = new THREE.Box3().setFromBufferAttribute(new THREE.BufferAttribute(frames[0].positions, 3));
+  if (frames[0].mesh) box.union(new THREE.Box3().setFromBufferAttribute(new THREE.BufferAttribute(frames[0].mesh.positions, 3)));
+  const centre = box.getCenter(new THREE.Vector3());
+  const radius = Math.max(box.getSize(new THREE.Vector3()).length() / 2, 1e-6);
+  const distance = radius / Math.sin(THREE.MathUtils.degToRad(camera.fov / 2)) * 1.1;
+  const azimuth = THREE.MathUtils.degToRad(35), elevation = THREE.MathUtils.degToRad(25);
+  camera.position.set(centre.x + distance * Math.cos(elevation) * Math.cos(azimuth),
+                      centre.y + distance * Math.cos(elevation) * Math.sin(azimuth),
+                      centre.z + distance * Math.sin(elevation));
+  camera.near = distance / 100;
+  camera.far = distance * 100;
+  camera.updateProjectionMatrix();
+  controls.target.copy(centre);
+  controls.update();
+}
+
+// --- state -----------------------------------------------------------------------------------
+const state = { frame: -1, pieces: true, tets: false, playing: false };
+const ui = {
+  slider: document.getElementById('slider'),
+  label: document.getElementById('frame-label'),
+  stats: document.getElementById('stats'),
+  pieces: document.getElementById('pieces'),
+  tets: document.getElementById('tets'),
+  play: document.getElementById('play'),
+};
+ui.slider.max = String(frames.length - 1);
+ui.tets.disabled = !frames.some((f) => f.mesh);
+
+function surfaceColours(frame) {
+  if (state.pieces) return new THREE.Float32BufferAttribute(Float32Array.from(frame.colours, (c) => c / 255), 3);
+  const n = frame.positions.length / 3, plain = new Float32Array(3 * n);
+  for (let i = 0; i < n; ++i) plain.set([plainColour.r, plainColour.g, plainColour.b], 3 * i);
+  return new THREE.Float32BufferAttribute(plain, 3);
+}
+
+function show() {
+  const frame = frames[state.frame];
+  const geometry = new THREE.BufferGeometry();
+  geometry.setAttribute('position', new THREE.BufferAttribute(frame.positions, 3));
+  geometry.setAttribute('color', surfaceColours(frame));
+  geometry.setIndex(new THREE.BufferAttribute(frame.triangles, 1));
+  surfaceMesh.geometry.dispose();
+  surfaceMesh.geometry = geometry;
+
+  const lines = new THREE.BufferGeometry();
+  if (frame.mesh && state.tets) {
+    lines.setAttribute('position', new THREE.BufferAttribute(frame.mesh.positions, 3));
+    lines.setIndex(new THREE.BufferAttribute(frame.mesh.edges, 1));
+  }
+  tetLines.geometry.dispose();
+  tetLines.geometry = lines;
+  tetLines.visible = Boolean(frame.mesh && state.tets);
+
+  ui.slider.value = String(state.frame);
+  ui.label.textContent = `frame ${state.frame + 1} / ${frames.length}` +
+    (frame.time != null ? `  \u00b7  t = ${frame.time.toFixed(3)} s` : '');
+  ui.stats.textContent = `${frame.triangles.length / 3} triangles, ${frame.pieces} piece${frame.pieces === 1 ? '' : 's'}` +
+    (frame.mesh ? `, ${frame.mesh.edges.length / 2} tet edges` : '');
+  api.frame = state.frame;
+  draw();
+}
+
+function draw() {
+  sun.position.copy(camera.position);  // a headlight: every face the camera sees is lit
+  renderer.render(scene, camera);
+}
+
+api.setFrame = (i) => {
+  state.frame = Math.min(Math.max(0, Math.trunc(i)), frames.length - 1);
+  show();
+};
+api.setPieces = (on) => { state.pieces = Boolean(on); ui.pieces.checked = state.pieces; show(); };
+api.setTets = (on) => { state.tets = Boolean(on) && !ui.tets.disabled; ui.tets.checked = state.tets; show(); };
+
+let timer = null;
+function setPlaying(on) {
+  state.playing = on && frames.length > 1;
+  ui.play.innerHTML = state.playing ? '&#10074;&#10074;' : '&#9654;';
+  clearInterval(timer);
+  if (state.playing) timer = setInterval(() => api.setFrame((state.frame + 1) % frames.length), 1000 / 24);
+}
+
+document.getElementById('prev').addEventListener('click', () => api.setFrame(state.frame - 1));
+document.getElementById('next').addEventListener('click', () => api.setFrame(state.frame + 1));
+ui.play.addEventListener('click', () => setPlaying(!state.playing));
+ui.slider.addEventListener('input', () => api.setFrame(Number(ui.slider.value)));
+ui.pieces.addEventListener('change', () => api.setPieces(ui.pieces.checked));
+ui.tets.addEventListener('change', () => api.setTets(ui.tets.checked));
+window.addEventListener('keydown', (event) => {
+  if (event.key === 'ArrowRight') api.setFrame(state.frame + 1);
+  else if (event.key === 'ArrowLeft') api.setFrame(state.frame - 1);
+  else if (event.key === ' ') { setPlaying(!state.playing); event.preventDefault(); }
+});
+window.addEventListener('resize', () => {
+  camera.aspect = container.clientWidth / container.clientHeight;
+  camera.updateProjectionMatrix();
+  renderer.setSize(container.clientWidth, container.clientHeight);
+  draw();
+});
+
+api.setFrame(0);
+api.ready = true;
