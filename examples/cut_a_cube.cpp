@@ -9,6 +9,7 @@
 #include <tetcut/figures.hpp>
 #include <tetcut/generators.hpp>
 #include <tetcut/io.hpp>
+#include <tetcut/render.hpp>
 
 #include <cstdio>
 #include <filesystem>
@@ -40,6 +41,8 @@ int main(int argc, char** argv) {
   tetcut::TriangleSurface surface = result.surface.surface;
   surface.vertices = result.surface.positions(result.mesh, moved);
   tetcut::write_surface(out / "cube_pieces_apart.obj", surface);
-  std::printf("wrote %s\n", (out / "cube_pieces_apart.obj").string().c_str());
+  // A picture: each piece in its own colour (offscreen OpenGL ES; no display or GPU needed).
+  tetcut::render::write_png(out / "cube_pieces_apart.png", tetcut::render::render(surface));
+  std::printf("wrote %s and its picture, cube_pieces_apart.png\n", (out / "cube_pieces_apart.obj").string().c_str());
   return 0;
 }

@@ -10,6 +10,7 @@
 #include <tetcut/embed.hpp>
 #include <tetcut/figures.hpp>
 #include <tetcut/io.hpp>
+#include <tetcut/render.hpp>
 
 #include <cstdio>
 #include <filesystem>
@@ -52,6 +53,11 @@ int main(int argc, char** argv) {
   tetcut::TriangleSurface open = result.surface.surface;
   open.vertices = result.surface.positions(result.mesh, moved);
   tetcut::write_surface(out / "lips_open.obj", open);
+  // The open mouth, with the edges of the tet copies each lip took along.
+  tetcut::render::RenderOptions picture;
+  picture.line_points = moved;
+  picture.lines = tetcut::render::mesh_edges(result.mesh.mesh);
+  tetcut::render::write_png(out / "lips_open.png", tetcut::render::render(open, picture));
 
   // An incision through the upper lip, on the same cutter: a vertical cut x = 0.5 reaching from
   // above down to halfway into the lip.
@@ -65,6 +71,9 @@ int main(int argc, char** argv) {
   std::printf("incision: %d tets touched, now %d tet copies, %d pieces\n", batch.tets_touched, result.mesh.mesh.num_tets(),
               result.mesh.num_pieces());
   tetcut::write_surface(out / "lips_incised.obj", result.surface.surface);
-  std::printf("wrote lips_closed.obj, lips_closed.vtu, lips_open.obj and lips_incised.obj in %s\n", out.string().c_str());
+  tetcut::render::write_png(out / "lips_incised.png", tetcut::render::render(result.surface.surface));
+  std::printf("wrote lips_closed.obj, lips_closed.vtu, lips_open.obj and lips_incised.obj in %s, with pictures lips_open.png "
+              "and lips_incised.png\n",
+              out.string().c_str());
   return 0;
 }

@@ -4,9 +4,11 @@
 #include <tetcut/cutter.hpp>
 #include <tetcut/figures.hpp>
 #include <tetcut/io.hpp>
+#include <tetcut/render.hpp>
 
 #include <cstdio>
 #include <filesystem>
+#include <vector>
 
 namespace {
 
@@ -17,6 +19,27 @@ void write(const std::filesystem::path& stem, const tetcut::CutResult& result) {
   options.cell_fields.push_back(std::move(piece));
   tetcut::write_tet_mesh(stem.string() + ".vtu", result.mesh.mesh, options);
   tetcut::write_surface(stem.string() + "_surface.ply", result.surface.surface, {.binary = true});
+  // The pieces touch, so pull each one away from the centre a little to see them apart.
+  const tetcut::TetMesh& mesh = result.mesh.mesh;
+  std::vector<tetcut::Vec3> centre_of(result.mesh.num_pieces(), tetcut::Vec3::Zero());
+  std::vector<int> copies(result.mesh.num_pieces(), 0);
+  tetcut::Vec3 centre = tetcut::Vec3::Zero();
+  for (tetcut::Index c = 0; c < mesh.num_tets(); ++c) {
+    tetcut::Vec3 middle = tetcut::Vec3::Zero();
+    for (int k = 0; k < 4; ++k) middle += mesh.rest().row(mesh.tets()(c, k)).transpose() / 4;
+    centre_of[result.mesh.tet_piece[c]] += middle;
+    copies[result.mesh.tet_piece[c]] += 1;
+    centre += middle / static_cast<double>(mesh.num_tets());
+  }
+  tetcut::Points apart = mesh.rest();
+  for (tetcut::Index c = 0; c < mesh.num_tets(); ++c) {
+    const int own = result.mesh.tet_piece[c];
+    const tetcut::Vec3 push = 0.4 * (centre_of[own] / copies[own] - centre);
+    for (int k = 0; k < 4; ++k) apart.row(mesh.tets()(c, k)) = mesh.rest().row(mesh.tets()(c, k)) + push.transpose();
+  }
+  tetcut::TriangleSurface exploded = result.surface.surface;
+  exploded.vertices = result.surface.positions(result.mesh, apart);
+  tetcut::render::write_png(stem.string() + ".png", tetcut::render::render(exploded));
 }
 
 }  // namespace

@@ -4,12 +4,15 @@
 // through the current deformation, and the strip between the last two rest-space poses is cut.
 // Consecutive strips share their edge exactly, so the incision is continuous even though the
 // block moved between frames (see swept_blade). New nodes start where the nodes they were split
-// from are. Run it with an output directory: it writes the material surface, deformed, at the end.
+// from are. Run it with an output directory: it writes the material surface, deformed, at the end,
+// and a picture of every other frame, assembled into scalpel.gif when ffmpeg is installed.
 
 #include <tetcut/blade.hpp>
 #include <tetcut/cutter.hpp>
 #include <tetcut/generators.hpp>
+#include <tetcut/error.hpp>
 #include <tetcut/io.hpp>
+#include <tetcut/render.hpp>
 
 #include <cmath>
 #include <cstdio>
@@ -52,13 +55,38 @@ int main(int argc, char** argv) {
     cutter.set_current(now);
     const tetcut::Points rest = cutter.to_rest(blade_at(t));
     in_material.push_back({rest.row(0).transpose(), rest.row(1).transpose()});
-    if (frame == 0) continue;
-    const tetcut::CutBatchReport report =
-        cutter.cut(tetcut::swept_blade(std::span<const tetcut::BladePose>(in_material.data() + frame - 1, 2)));
-    if (frame % 8 == 0) {
-      std::printf("frame %2d: touched %3d tets, %3zu new nodes, %2zu new tets; mesh has %d tets\n", frame,
-                  report.tets_touched, report.new_node_source.size(), report.new_tet_source.size(), cutter.num_tets());
+    if (frame > 0) {
+      const tetcut::CutBatchReport report =
+          cutter.cut(tetcut::swept_blade(std::span<const tetcut::BladePose>(in_material.data() + frame - 1, 2)));
+      if (frame % 8 == 0) {
+        std::printf("frame %2d: touched %3d tets, %3zu new nodes, %2zu new tets; mesh has %d tets\n", frame,
+                    report.tets_touched, report.new_node_source.size(), report.new_tet_source.size(), cutter.num_tets());
+      }
     }
+    if (frame % 2 == 0) {
+      // The picture of this frame: the deformed material surface and the blade, as a line.
+      const tetcut::CutResult now_cut = cutter.result();
+      tetcut::TriangleSurface surface = now_cut.surface.surface;
+      surface.vertices = now_cut.surface.positions(now_cut.mesh, now_cut.mesh.mesh.current());
+      tetcut::render::RenderOptions picture;
+      picture.width = 480;
+      picture.height = 360;
+      picture.frame = Eigen::AlignedBox3d(tetcut::Vec3(-0.3, -0.3, -0.3), tetcut::Vec3(1.3, 1.3, 1.3));
+      picture.line_points = blade_at(t);
+      picture.lines.resize(1, 2);
+      picture.lines << 0, 1;
+      std::filesystem::create_directories(out / "scalpel_frames");
+      char name[64];
+      std::snprintf(name, sizeof name, "frame_%04d.png", frame / 2);
+      tetcut::render::write_png(out / "scalpel_frames" / name, tetcut::render::render(surface, picture));
+    }
+  }
+  try {
+    tetcut::render::write_animation(out / "scalpel_frames" / "frame_%04d.png", 10, out / "scalpel.gif");
+    std::printf("wrote scalpel.gif\n");
+  } catch (const tetcut::Error& e) {
+    if (e.kind() != tetcut::ErrorKind::kUnsupported) throw;
+    std::printf("no animation: %s\n", e.what());  // ffmpeg is missing; the frames are there
   }
   const tetcut::CutResult result = cutter.result();
   tetcut::TriangleSurface surface = result.surface.surface;

@@ -680,8 +680,8 @@ void add_sim_command(CLI::App& app, Action& action) {
   command->add_option("--frames", options->frames, "Stop after this many output frames (a quick look)")
       ->check(CLI::NonNegativeNumber);
   command->add_flag("--png", options->png,
-                    "Also render each frame's surface to frame_NNNN.png (pieces coloured; the camera frames the "
-                    "first frame, grown by half)");
+                    "Also render each frame's surface to frame_NNNN.png (pieces coloured; the camera is the scene's "
+                    "output.picture, by default framing the first frame grown by half)");
   command->add_option("--animation", options->animation,
                       "Also assemble the frames into an animation with ffmpeg: .mp4 or .gif (implies --png)");
   command->add_option("--fps", options->fps, "Frames per second of the animation (default: real time, 1 / output_every, "
@@ -709,6 +709,7 @@ void add_sim_command(CLI::App& app, Action& action) {
                    std::string(static_cast<std::size_t>(width - filled), ' '), frame, total, seconds_since(start));
       };
       Eigen::AlignedBox3d frame_box;
+      if (scene.picture_box) frame_box = Eigen::AlignedBox3d(scene.picture_box->min, scene.picture_box->max);
       if (options->png) {
         run.frame_surface = [&](int frame, const TriangleSurface& surface) {
           if (frame_box.isEmpty()) {
@@ -720,6 +721,8 @@ void add_sim_command(CLI::App& app, Action& action) {
           render_options.width = 640;
           render_options.height = 480;
           render_options.frame = frame_box;
+          render_options.camera.azimuth_degrees = scene.picture_azimuth;
+          render_options.camera.elevation_degrees = scene.picture_elevation;
           render::write_png(options->out / fmt::format("frame_{:04d}.png", frame), render::render(surface, render_options));
         };
       }

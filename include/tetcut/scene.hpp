@@ -29,7 +29,10 @@
 //                    | "blade": {"poses": [[ax,ay,az, bx,by,bz], ...]}}]   the strip a blade sweeps
 //     "transforms":[{"time", "rotate": {"axis", "degrees", "centre"}} | {"time", "translate": [...]}]
 //     "springs":   [{"time", "cuts": [FIRST, LAST], "stiffness"}]   close those cut events' incisions
-//     "output":    {"mesh": true, "surface": true} }
+//     "output":    {"mesh": true, "surface": true,
+//                   "picture": {"box": [...], "azimuth", "elevation"}} }   the camera of pictures
+//                   (tetcut sim --png): the region to frame (default: the first frame grown by
+//                   half) and the view angles in degrees (default 35 and 25)
 //
 // Paths are relative to the scene file. Unknown keys are errors, so a typo is never ignored.
 
@@ -88,6 +91,9 @@ struct Scene {
   std::vector<SceneTransform> transforms;
   std::vector<SceneSprings> springs;
   bool write_mesh = true, write_surface = true;
+  /// Where pictures of the frames look (for a renderer; the scene does not draw).
+  std::optional<Box> picture_box;
+  double picture_azimuth = 35, picture_elevation = 25;
 };
 
 /// Reads and validates a scene. Throws Error(kInvalidInput) naming the file and the key path

@@ -26,9 +26,10 @@ struct ViewFrame {
 };
 
 /// The page's HTML. Frames whose triangles, pieces or edges equal the frame before them share
-/// that frame's arrays, so a simulation without cuts stores its connectivity once: the page is
-/// about 12 bytes per surface vertex per frame, plus the connectivity (and 12 bytes per tet node
-/// per frame with edges), base64-encoded. Throws Error(kUnsupported) when this build of tetcut
+/// that frame's arrays, so a simulation without cuts stores its connectivity once. Positions are
+/// quantised to 16 bits per coordinate within each frame's bounds (1/65535 of the box, below a
+/// pixel): the page holds about 6 bytes per surface vertex (and per tet node, with edges) per
+/// frame, plus the connectivity, base64-encoded. Throws Error(kUnsupported) when this build of tetcut
 /// has no viewer script (built without Node.js), Error(kInvalidArgument) when there are no frames.
 std::string page(const std::string& title, const std::vector<ViewFrame>& frames);
 /// Writes page() to `path` atomically.

@@ -1,6 +1,8 @@
 // The viewer page: the HTML template and the bundled three.js script (both compiled in, see
 // viewer_assets.hpp) with the frames inlined as JSON whose arrays are base64 of little-endian
-// float32 / uint32 / uint8 data, which the page turns into typed arrays without parsing numbers.
+// uint16 / uint32 / uint8 data, which the page turns into typed arrays without parsing numbers.
+// Positions are quantised to 16 bits per coordinate within their frame's bounding box (a step of
+// 1/65535 of the box, far below a pixel), which halves the page against float32.
 
 #include <tetcut/error.hpp>
 #include <tetcut/io.hpp>
@@ -10,6 +12,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <bit>
 #include <cmath>
 #include <cstdint>
@@ -35,6 +38,24 @@ std::string base64_of(const Matrix& matrix) {
     }
   }
   return io::base64_encode(bytes);
+}
+
+// Positions as {"min": [x, y, z], "step": [dx, dy, dz], "q": base64 of uint16 x 3 per point}:
+// point = min + q * step, with the rounding error at most half a step.
+nlohmann::json quantised(const Points& points) {
+  Vec3 low = Vec3::Zero(), high = Vec3::Zero();
+  if (points.rows() > 0) {
+    low = points.colwise().minCoeff().transpose();
+    high = points.colwise().maxCoeff().transpose();
+  }
+  const Vec3 step = ((high - low) / 65535.0).cwiseMax(Vec3::Constant(1e-300));
+  Eigen::Matrix<std::uint16_t, Eigen::Dynamic, 3, Eigen::RowMajor> q(points.rows(), 3);
+  for (Index v = 0; v < points.rows(); ++v) {
+    for (int c = 0; c < 3; ++c) {
+      q(v, c) = static_cast<std::uint16_t>(std::clamp(std::lround((points(v, c) - low[c]) / step[c]), 0L, 65535L));
+    }
+  }
+  return {{"min", {low[0], low[1], low[2]}}, {"step", {step[0], step[1], step[2]}}, {"q", base64_of<std::uint16_t>(q)}};
 }
 
 // RGB per vertex: the colour of its piece (pieces are connected through shared vertices, so a
@@ -104,7 +125,7 @@ std::string page(const std::string& title, const std::vector<ViewFrame>& frames)
                                 previous->surface.triangles == surface.triangles;
     const bool same_colours = previous && previous_colours.rows() == colours.rows() && previous_colours == colours;
     f["surface"] = {
-        {"positions", base64_of<float>(surface.vertices)},
+        {"positions", quantised(surface.vertices)},
         {"triangles", same_triangles ? nlohmann::json(nullptr) : nlohmann::json(base64_of<std::uint32_t>(surface.triangles))},
         {"colours", same_colours ? nlohmann::json(nullptr) : nlohmann::json(base64_of<std::uint8_t>(colours))},
         {"pieces", pieces},
@@ -114,7 +135,7 @@ std::string page(const std::string& title, const std::vector<ViewFrame>& frames)
       const bool same_edges = previous && previous->mesh_edges.rows() == frame.mesh_edges.rows() &&
                               previous->mesh_edges == frame.mesh_edges;
       f["mesh"] = {
-          {"positions", base64_of<float>(frame.mesh_points)},
+          {"positions", quantised(frame.mesh_points)},
           {"edges", same_edges ? nlohmann::json(nullptr) : nlohmann::json(base64_of<std::uint32_t>(frame.mesh_edges))},
       };
     } else {

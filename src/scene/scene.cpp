@@ -360,9 +360,15 @@ Scene load_scene(const std::filesystem::path& path) {
     }
   }
   if (const auto output = root.get("output")) {
-    output->allow({"mesh", "surface"});
+    output->allow({"mesh", "surface", "picture"});
     if (const auto v = output->get("mesh")) scene.write_mesh = v->boolean();
     if (const auto v = output->get("surface")) scene.write_surface = v->boolean();
+    if (const auto picture = output->get("picture")) {
+      picture->allow({"box", "azimuth", "elevation"});
+      if (const auto v = picture->get("box")) scene.picture_box = v->box();
+      if (const auto v = picture->get("azimuth")) scene.picture_azimuth = v->number();
+      if (const auto v = picture->get("elevation")) scene.picture_elevation = v->number();
+    }
   }
   return scene;
 }

@@ -22,14 +22,25 @@ assert "<script src" not in html and "http://" not in html.split("tetcut-data")[
 data = json.loads(re.search(r'<script id="tetcut-data" type="application/json">(.*?)</script>', html, re.S).group(1))
 frames = data["frames"]
 assert [f["time"] for f in frames] == [0, 0.05, 0.1], [f["time"] for f in frames]
-# Topology is stored once; positions every frame, as float32 (2x2x2 cubes of 6 tets: 27 nodes).
+# Topology is stored once; positions every frame, as 16-bit steps within the frame's box (2x2x2
+# cubes of 6 tets: 27 nodes).
 assert frames[0]["surface"]["triangles"] and frames[1]["surface"]["triangles"] is None
 assert frames[0]["mesh"]["edges"] and frames[2]["mesh"]["edges"] is None
-nodes = len(base64.b64decode(frames[2]["mesh"]["positions"])) // 12
+p = frames[2]["mesh"]["positions"]
+q = base64.b64decode(p["q"])
+nodes = len(q) // 6
 assert nodes == 27, nodes
-zs = struct.unpack("<%df" % (3 * nodes), base64.b64decode(frames[2]["mesh"]["positions"]))[2::3]
-assert min(zs) < 0.1 - 1e-3, "the last frame does not hold the fallen positions"
+zs = [p["min"][2] + k * p["step"][2] for k in struct.unpack("<%dH" % (3 * nodes), q)[2::3]]
+assert abs(min(zs) - p["min"][2]) < 1e-12 and min(zs) < 0.1 - 1e-3, "the last frame does not hold the fallen positions"
 assert frames[0]["surface"]["pieces"] == 1
+# Within half a step of what the frame's mesh file holds (read by meshio, independently).
+import meshio
+points = meshio.read(sys.argv[1].replace("view.html", "mesh_0002.vtu")).points
+decoded = struct.unpack("<%dH" % (3 * nodes), q)
+for n in range(nodes):
+    for c in range(3):
+        error = abs(p["min"][c] + decoded[3 * n + c] * p["step"][c] - points[n][c])
+        assert error <= 0.5 * p["step"][c] * (1 + 1e-9), (n, c, error)
 PY
 
 # A surface file, with a mesh's edges; a mesh file alone; the default names.

@@ -134,8 +134,12 @@ TEST(ViewPage, SharesUnchangedTopologyAndKeepsTheMarkupIntact) {
   EXPECT_EQ(frames[2]["surface"]["pieces"], 3);
   EXPECT_EQ(frames[1]["time"], 0.5);
   EXPECT_TRUE(frames[0]["mesh"].is_null());
-  // Positions are float32: 16 vertices, 12 bytes each, base64 (4 characters per 3 bytes).
-  EXPECT_EQ(frames[1]["surface"]["positions"].get<std::string>().size(), 16u * 12 / 3 * 4);
+  // Positions are 16-bit steps in the frame's box: 16 vertices, 6 bytes each, base64 (4 characters
+  // per 3 bytes). The box of the moved boxes: [0, 2.5] x [0, 1] x [1, 2].
+  const nlohmann::json& positions = frames[1]["surface"]["positions"];
+  EXPECT_EQ(positions["q"].get<std::string>().size(), 16u * 6 / 3 * 4);
+  EXPECT_EQ(positions["min"], nlohmann::json({0.0, 0.0, 1.0}));
+  EXPECT_DOUBLE_EQ(positions["step"][0].get<double>(), 2.5 / 65535);
   // The script is inline, and the page has exactly its own closing script tags.
   EXPECT_EQ(html.find("<script src"), std::string::npos);
   std::size_t closes = 0;
@@ -154,7 +158,7 @@ TEST(ViewPage, MeshFramesCarryTheirEdges) {
   // One cube of 6 tets: 12 sides, 6 face diagonals and 1 body diagonal; 2 uint32 each, base64.
   EXPECT_EQ(frame.mesh_edges.rows(), 19);
   EXPECT_EQ(data["frames"][0]["mesh"]["edges"].get<std::string>().size(), (19u * 2 * 4 + 2) / 3 * 4);
-  EXPECT_EQ(data["frames"][0]["mesh"]["positions"].get<std::string>().size(), (8u * 12 + 2) / 3 * 4);
+  EXPECT_EQ(data["frames"][0]["mesh"]["positions"]["q"].get<std::string>().size(), 8u * 6 / 3 * 4);
   EXPECT_TRUE(data["frames"][1]["mesh"]["edges"].is_null());
 }
 

@@ -57,8 +57,26 @@ TEST(Scene, ErrorsNameTheKey) {
   EXPECT_NE(load_error(std::string("{") + kCube + "," + time + R"(, "material": {"model": "jelly"}})")
                 .find("'jelly' is not one of stable_neo_hookean, corotated"),
             std::string::npos);
+  EXPECT_NE(load_error(std::string("{") + kCube + "," + time + R"(, "output": {"picture": {"zoom": 2}}})")
+                .find("output.picture: unknown key 'zoom'"),
+            std::string::npos);
   EXPECT_NE(load_error("{ \"mesh\": ").find("not valid JSON"), std::string::npos);
   EXPECT_NE(load_error(R"({"time": {"duration": 1}})").find("missing key 'mesh'"), std::string::npos);
+}
+
+TEST(Scene, PictureCameraIsRead) {
+  testing::TempDir dir;
+  const Scene plain = load_scene(write_scene(dir.path(), std::string("{") + kCube + R"(, "time": {"duration": 0.1}})"));
+  EXPECT_FALSE(plain.picture_box);
+  EXPECT_EQ(plain.picture_azimuth, 35);
+  const Scene scene = load_scene(write_scene(
+      dir.path(), std::string("{") + kCube +
+                      R"(, "time": {"duration": 0.1}, "output": {"picture": {"box": [-1, -2, -3, 1, 2, 3], "elevation": 5}}})"));
+  ASSERT_TRUE(scene.picture_box);
+  EXPECT_EQ(scene.picture_box->min, Vec3(-1, -2, -3));
+  EXPECT_EQ(scene.picture_box->max, Vec3(1, 2, 3));
+  EXPECT_EQ(scene.picture_elevation, 5);
+  EXPECT_EQ(scene.picture_azimuth, 35);
 }
 
 TEST(Scene, CutInFlightThenBothPiecesLandOnTheGround) {

@@ -31,25 +31,46 @@ function decode(base64, Type) {
   return new Type(bytes.buffer);
 }
 
+function dequantise(p) {
+  const q = decode(p.q, Uint16Array), out = new Float32Array(q.length);
+  for (let i = 0; i < q.length; ++i) out[i] = p.min[i % 3] + q[i] * p.step[i % 3];
+  return out;
+}
+
 // Frames share arrays with the frame before them when the topology did not change (null in the
-// data): resolve those references once, so every frame has its own complete description.
+// data): resolve those references up front (which only copies base64 strings), and decode a
+// frame's arrays when it is first shown, so a long simulation opens at once.
 function readFrames(data) {
   if (!Array.isArray(data.frames) || data.frames.length === 0) fail('the page holds no frames');
   const frames = [];
   let triangles = null, colours = null, edges = null;
   for (const [i, f] of data.frames.entries()) {
-    const positions = decode(f.surface.positions, Float32Array);
-    triangles = decode(f.surface.triangles, Uint32Array) ?? triangles;
-    colours = decode(f.surface.colours, Uint8Array) ?? colours;
+    triangles = f.surface.triangles ?? triangles;
+    colours = f.surface.colours ?? colours;
     if (!triangles || !colours) fail(`frame ${i} has no triangles`);
-    let mesh = null;
-    if (f.mesh) {
-      edges = decode(f.mesh.edges, Uint32Array) ?? edges;
-      mesh = { positions: decode(f.mesh.positions, Float32Array), edges };
-    }
-    frames.push({ time: f.time, positions, triangles, colours, pieces: f.surface.pieces, mesh });
+    if (f.mesh) edges = f.mesh.edges ?? edges;
+    frames.push({ time: f.time, pieces: f.surface.pieces, source: { f, triangles, colours, edges }, decoded: null });
   }
   return frames;
+}
+
+// Typed arrays of a frame, decoded once; frames that share connectivity share its arrays.
+const decodedArrays = new Map();
+function shared(base64, Type) {
+  if (!decodedArrays.has(base64)) decodedArrays.set(base64, decode(base64, Type));
+  return decodedArrays.get(base64);
+}
+function decoded(frame) {
+  if (!frame.decoded) {
+    const { f, triangles, colours, edges } = frame.source;
+    frame.decoded = {
+      positions: dequantise(f.surface.positions),
+      triangles: shared(triangles, Uint32Array),
+      colours: shared(colours, Uint8Array),
+      mesh: f.mesh ? { positions: dequantise(f.mesh.positions), edges: shared(edges, Uint32Array) } : null,
+    };
+  }
+  return frame.decoded;
 }
 
 const data = JSON.parse(document.getElementById('tetcut-data').textContent);
@@ -67,8 +88,8 @@ renderer.setClearColor(0xf2f2f2);
 container.appendChild(renderer.domElement);
 
 const scene = new THREE.Scene();
-scene.add(new THREE.HemisphereLight(0xffffff, 0x606070, 1.6));
-const sun = new THREE.DirectionalLight(0xffffff, 1.6);
+scene.add(new THREE.HemisphereLight(0xffffff, 0x606070, 1.2));
+const sun = new THREE.DirectionalLight(0xffffff, 1.8);
 scene.add(sun);
 
 const camera = new THREE.PerspectiveCamera(35, container.clientWidth / container.clientHeight, 1e-3, 1e3);
@@ -80,16 +101,21 @@ const surfaceMaterial = new THREE.MeshStandardMaterial({
   vertexColors: true, flatShading: true, side: THREE.DoubleSide, roughness: 0.8, metalness: 0,
   polygonOffset: true, polygonOffsetFactor: 1, polygonOffsetUnits: 1,  // tet edges stay in front
 });
-const plainColour = new THREE.Color(0xc8c8cd);
+const plainColour = new THREE.Color(0xc8c8cd);  // (THREE.Color converts hex from sRGB)
 const edgeMaterial = new THREE.LineBasicMaterial({ color: 0x303040, transparent: true, opacity: 0.45 });
 const surfaceMesh = new THREE.Mesh(new THREE.BufferGeometry(), surfaceMaterial);
 const tetLines = new THREE.LineSegments(new THREE.BufferGeometry(), edgeMaterial);
 scene.add(surfaceMesh, tetLines);
 
-// Frame the first frame's bounds (grown a little) so the camera holds still while stepping.
+// Frame the bounds of every frame (each frame's quantisation box, known without decoding it), so
+// the camera holds still while stepping and nothing moves out of view.
 {
-  const box = new THREE.Box3().setFromBufferAttribute(new THREE.BufferAttribute(frames[0].positions, 3));
-  if (frames[0].mesh) box.union(new THREE.Box3().setFromBufferAttribute(new THREE.BufferAttribute(frames[0].mesh.positions, 3)));
+  const box = new THREE.Box3();
+  for (const frame of frames) {
+    const { min, step } = frame.source.f.surface.positions;
+    box.expandByPoint(new THREE.Vector3(...min));
+    box.expandByPoint(new THREE.Vector3(min[0] + 65535 * step[0], min[1] + 65535 * step[1], min[2] + 65535 * step[2]));
+  }
   const centre = box.getCenter(new THREE.Vector3());
   const radius = Math.max(box.getSize(new THREE.Vector3()).length() / 2, 1e-6);
   const distance = radius / Math.sin(THREE.MathUtils.degToRad(camera.fov / 2)) * 1.1;
@@ -115,17 +141,24 @@ const ui = {
   play: document.getElementById('play'),
 };
 ui.slider.max = String(frames.length - 1);
-ui.tets.disabled = !frames.some((f) => f.mesh);
+ui.tets.disabled = !frames.some((f) => f.source.f.mesh);
+
+// The colours in the data are sRGB bytes (as in tetcut's PNGs); three.js lights in linear space.
+const linearOf = Float32Array.from({ length: 256 }, (_, i) => {
+  const c = i / 255;
+  return c <= 0.04045 ? c / 12.92 : ((c + 0.055) / 1.055) ** 2.4;
+});
 
 function surfaceColours(frame) {
-  if (state.pieces) return new THREE.Float32BufferAttribute(Float32Array.from(frame.colours, (c) => c / 255), 3);
+  if (state.pieces) return new THREE.Float32BufferAttribute(Float32Array.from(frame.colours, (c) => linearOf[c]), 3);
   const n = frame.positions.length / 3, plain = new Float32Array(3 * n);
   for (let i = 0; i < n; ++i) plain.set([plainColour.r, plainColour.g, plainColour.b], 3 * i);
   return new THREE.Float32BufferAttribute(plain, 3);
 }
 
 function show() {
-  const frame = frames[state.frame];
+  const frame = decoded(frames[state.frame]);
+  const pieces = frames[state.frame].pieces, time = frames[state.frame].time;
   const geometry = new THREE.BufferGeometry();
   geometry.setAttribute('position', new THREE.BufferAttribute(frame.positions, 3));
   geometry.setAttribute('color', surfaceColours(frame));
@@ -144,8 +177,8 @@ function show() {
 
   ui.slider.value = String(state.frame);
   ui.label.textContent = `frame ${state.frame + 1} / ${frames.length}` +
-    (frame.time != null ? `  \u00b7  t = ${frame.time.toFixed(3)} s` : '');
-  ui.stats.textContent = `${frame.triangles.length / 3} triangles, ${frame.pieces} piece${frame.pieces === 1 ? '' : 's'}` +
+    (time != null ? `  \u00b7  t = ${time.toFixed(3)} s` : '');
+  ui.stats.textContent = `${frame.triangles.length / 3} triangles, ${pieces} piece${pieces === 1 ? '' : 's'}` +
     (frame.mesh ? `, ${frame.mesh.edges.length / 2} tet edges` : '');
   api.frame = state.frame;
   draw();

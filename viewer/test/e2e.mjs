@@ -53,9 +53,12 @@ let shots = 0;
 async function pixels(page, reference = null) {
   // Kept in the work directory, for a look when a check fails.
   const png = await page.locator('#view canvas').screenshot({ path: path.join(work, `shot_${shots++}.png`) });
+  // The control panel floats over the view: its pixels are not the scene's. (The canvas fills the
+  // page, so page and canvas coordinates agree.)
+  const panel = await page.locator('#panel').boundingBox();
   const reader = await browser.newPage();
   try {
-    const stats = await reader.evaluate(async ([base64, before]) => {
+    const stats = await reader.evaluate(async ([base64, before, panel]) => {
       const decode = async (data) => {
         const image = new Image();
         image.src = `data:image/png;base64,${data}`;
@@ -65,13 +68,17 @@ async function pixels(page, reference = null) {
         canvas.height = image.height;
         const context = canvas.getContext('2d');
         context.drawImage(image, 0, 0);
-        return context.getImageData(0, 0, image.width, image.height).data;
+        return context.getImageData(0, 0, image.width, image.height);
       };
-      const data = await decode(base64);
-      const old = before ? await decode(before) : null;
+      const { data, width } = await decode(base64);
+      const old = before ? (await decode(before)).data : null;
       let drawn = 0, saturated = 0, changed = 0;
       const hues = new Set();
+      let total = 0;
       for (let i = 0; i < data.length; i += 4) {
+        const x = (i / 4) % width, y = Math.floor(i / 4 / width);
+        if (x >= panel.x && x < panel.x + panel.width && y >= panel.y && y < panel.y + panel.height) continue;
+        total += 1;
         const [r, g, b] = [data[i], data[i + 1], data[i + 2]];
         if (old && old.length === data.length &&
             Math.abs(r - old[i]) + Math.abs(g - old[i + 1]) + Math.abs(b - old[i + 2]) > 30) changed += 1;
@@ -85,8 +92,8 @@ async function pixels(page, reference = null) {
           hues.add(Math.floor(h * 2));
         }
       }
-      return { total: data.length / 4, drawn, saturated, changed, hues: hues.size };
-    }, [png.toString('base64'), reference ? reference.png : null]);
+      return { total, drawn, saturated, changed, hues: hues.size };
+    }, [png.toString('base64'), reference ? reference.png : null, panel]);
     return { ...stats, png: png.toString('base64') };
   } finally {
     await reader.close();
