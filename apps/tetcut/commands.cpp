@@ -838,9 +838,10 @@ void add_view_command(CLI::App& app, Action& action) {
       if (!directory) check_not_input(out, in);
       const auto start = Clock::now();
       const std::vector<view::ViewFrame> frames = view::load_frames(in, options->mesh);
-      const std::string title = !options->title.empty() ? options->title
-                                : directory            ? fs::absolute(in).lexically_normal().parent_path().filename().string()
-                                                       : in.filename().string();
+      // The title names what is shown: the file, or the directory ("out/run/" gives "run").
+      fs::path named = fs::absolute(in).lexically_normal();
+      if (named.filename().empty()) named = named.parent_path();
+      const std::string title = !options->title.empty() ? options->title : named.filename().string();
       view::write_page(out, title.empty() ? in.string() : title, frames);
       const bool edges = std::any_of(frames.begin(), frames.end(), [](const view::ViewFrame& f) { return f.mesh_edges.rows() > 0; });
       fmt::print("wrote {} ({} frame{}{}, {:.1f} MB) in {:.2f} s; open it in a browser\n", out.string(), frames.size(),

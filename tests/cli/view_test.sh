@@ -14,6 +14,7 @@ JSON
 expect_exit 0 "$TETCUT" sim drop.json -o sim
 expect_exit 0 "$TETCUT" view sim
 expect_stdout "sim/view.html (3 frames, with tet edges"
+grep -qF "<title>sim - tetcut</title>" sim/view.html || fail "a directory's page is not titled by its name"
 # One page, nothing fetched: three.js and the data are inline.
 "$PYTHON" - sim/view.html <<'PY'
 import base64, json, re, struct, sys

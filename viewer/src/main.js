@@ -112,9 +112,10 @@ scene.add(surfaceMesh, tetLines);
 {
   const box = new THREE.Box3();
   for (const frame of frames) {
-    const { min, step } = frame.source.f.surface.positions;
-    box.expandByPoint(new THREE.Vector3(...min));
-    box.expandByPoint(new THREE.Vector3(min[0] + 65535 * step[0], min[1] + 65535 * step[1], min[2] + 65535 * step[2]));
+    for (const { min, step } of [frame.source.f.surface.positions, frame.source.f.mesh?.positions].filter(Boolean)) {
+      box.expandByPoint(new THREE.Vector3(...min));
+      box.expandByPoint(new THREE.Vector3(min[0] + 65535 * step[0], min[1] + 65535 * step[1], min[2] + 65535 * step[2]));
+    }
   }
   const centre = box.getCenter(new THREE.Vector3());
   const radius = Math.max(box.getSize(new THREE.Vector3()).length() / 2, 1e-6);
