@@ -114,16 +114,17 @@ std::string page(const std::string& title, const std::vector<ViewFrame>& frames)
   nlohmann::json& out_frames = data["frames"];
   out_frames = nlohmann::json::array();
   const ViewFrame* previous = nullptr;
-  Eigen::Matrix<std::uint8_t, Eigen::Dynamic, 3, Eigen::RowMajor> previous_colours;
+  Eigen::Matrix<std::uint8_t, Eigen::Dynamic, 3, Eigen::RowMajor> colours;
+  Index pieces = 0;
   for (const ViewFrame& frame : frames) {
     const TriangleSurface& surface = frame.surface;
     nlohmann::json f;
     f["time"] = std::isfinite(frame.time) ? nlohmann::json(frame.time) : nlohmann::json(nullptr);
-    Index pieces = 0;
-    const auto colours = vertex_colours(surface, &pieces);
     const bool same_triangles = previous && previous->surface.triangles.rows() == surface.triangles.rows() &&
                                 previous->surface.triangles == surface.triangles;
-    const bool same_colours = previous && previous_colours.rows() == colours.rows() && previous_colours == colours;
+    // Pieces and their colours follow from the triangles alone: found again only when they change.
+    const bool same_colours = same_triangles && previous->surface.num_vertices() == surface.num_vertices();
+    if (!same_colours) colours = vertex_colours(surface, &pieces);
     f["surface"] = {
         {"positions", quantised(surface.vertices)},
         {"triangles", same_triangles ? nlohmann::json(nullptr) : nlohmann::json(base64_of<std::uint32_t>(surface.triangles))},
@@ -143,7 +144,6 @@ std::string page(const std::string& title, const std::vector<ViewFrame>& frames)
     }
     out_frames.push_back(std::move(f));
     previous = &frame;
-    previous_colours = colours;
   }
 
   // Fill the template's three slots in one pass, so nothing inserted is scanned again.
@@ -203,6 +203,7 @@ std::vector<ViewFrame> load_frames(const std::filesystem::path& input, const std
                     meshes.string());
       }
     }
+    Tets previous_tets;
     for (std::size_t f = 0; f < surface_series.size(); ++f) {
       ViewFrame frame;
       frame.time = surface_series[f].time;
@@ -210,7 +211,10 @@ std::vector<ViewFrame> load_frames(const std::filesystem::path& input, const std
       if (!mesh_series.empty()) {
         const TetMesh tets = read_tet_mesh(mesh_series[f].file);
         frame.mesh_points = tets.rest();  // a sim frame's mesh file holds its current positions
-        frame.mesh_edges = render::mesh_edges(tets);
+        // The edges (an adjacency build) change only when a cut changes the tets.
+        const bool same_tets = f > 0 && previous_tets.rows() == tets.tets().rows() && previous_tets == tets.tets();
+        frame.mesh_edges = same_tets ? frames.back().mesh_edges : render::mesh_edges(tets);
+        previous_tets = tets.tets();
       }
       frames.push_back(std::move(frame));
     }
