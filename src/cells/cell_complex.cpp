@@ -4,6 +4,10 @@
 #include <cmath>
 #include <limits>
 #include <stdexcept>
+#include <unordered_map>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 
 namespace tetcut::cells {
 
@@ -87,12 +91,9 @@ EdgeId CellComplex::add_edge(VertexId a, VertexId b, std::array<PlaneId, 2> line
   edge.b = b;
   edge.line = line;
   edge.mesh_edge = mesh_edge;
-  const EdgeId id = static_cast<EdgeId>(edges_.size());
-  if (mesh_edge >= 0) {
-    edge.next_on_mesh_edge = mesh_edge_first_[mesh_edge];
-    mesh_edge_first_[mesh_edge] = id;
-  }
-  edges_.push_back(std::move(edge));
+  if (mesh_edge >= 0) edge.next_on_mesh_edge = mesh_edge_first_[mesh_edge];
+  const EdgeId id = static_cast<EdgeId>(edges_.push_back(std::move(edge)) - edges_.begin());
+  if (mesh_edge >= 0) mesh_edge_first_[mesh_edge] = id;
   return id;
 }
 
@@ -162,8 +163,7 @@ void CellComplex::add_face_facet(Index face, Index tet, CellId cell) {
   facet.mesh_face = face;
   facet.front = tet_side > 0 ? cell : other;
   facet.back = tet_side > 0 ? other : cell;
-  const FacetId id = static_cast<FacetId>(facets_.size());
-  facets_.push_back(std::move(facet));
+  const FacetId id = static_cast<FacetId>(facets_.push_back(std::move(facet)) - facets_.begin());
 
   // The cycle n0 -> n1 -> n2 (ascending ids) is counter-clockwise seen from the plane's front.
   const Index n[3] = {adj.faces(face, 0), adj.faces(face, 1), adj.faces(face, 2)};
@@ -185,12 +185,11 @@ void CellComplex::add_face_facet(Index face, Index tet, CellId cell) {
 
 CellId CellComplex::refine(Index tet) {
   if (first_cell_[tet] >= 0) return first_cell_[tet];
-  const CellId cell = static_cast<CellId>(cells_.size());
   Cell c;
   c.tet = tet;
   c.material = tet_material_[tet] != 0;
   c.label = tet_label_[tet];
-  cells_.push_back(std::move(c));
+  const CellId cell = static_cast<CellId>(cells_.push_back(std::move(c)) - cells_.begin());
   first_cell_[tet] = cell;
   const Side marker = unrefined_side(tet);
   for (int k = 0; k < 4; ++k) {
@@ -273,8 +272,8 @@ bool CellComplex::section_overlaps_triangle(CellId cell) const {
   // Edges of T lie on the walls: S wholly outside one of them. The corners of S are the cell's
   // vertices on the plane and the points where its edges cross it (not registered: most cells
   // tested here are not split).
-  const PlaneId plane = insertion_.triangle->plane.id;
-  for (const OrientedPlane& wall : insertion_.triangle->walls) {
+  const PlaneId plane = insertion().triangle->plane.id;
+  for (const OrientedPlane& wall : insertion().triangle->walls) {
     bool outside = true;
     for (const FacetId f : cells_[cell].facets) {
       const auto& corners = facets_[f].corners;
@@ -297,7 +296,7 @@ bool CellComplex::section_overlaps_triangle(CellId cell) const {
 }
 
 int CellComplex::corner_side(int k, PlaneId plane) const {
-  const PreparedTriangle& t = *insertion_.triangle;
+  const PreparedTriangle& t = *insertion().triangle;
   if (t.corners_are_inputs) return registry_->side_of_input(plane, t.corners[k]);
   return registry_->side_of_meet(t.plane.id, t.walls[k].id, t.walls[(k + 2) % 3].id, plane);
 }
@@ -333,7 +332,7 @@ bool tet_may_meet_triangle(const std::array<Vec3, 4>& x, const geometry::Plane& 
 }
 
 bool CellComplex::tet_may_be_cut(Index tet) const {
-  const PreparedTriangle& t = *insertion_.triangle;
+  const PreparedTriangle& t = *insertion().triangle;
   std::array<Vec3, 4> x;
   for (int k = 0; k < 4; ++k) x[k] = mesh_->rest().row(mesh_->tets()(tet, k)).transpose();
   const geometry::Plane& plane = registry_->plane(t.plane.id);
@@ -351,9 +350,9 @@ bool CellComplex::tet_may_be_cut(Index tet) const {
 // ---- Splitting ---------------------------------------------------------------------------------
 
 void CellComplex::touch(Index tet) {
-  if (tet_touch_stamp_[tet] == insertion_.stamp) return;
-  tet_touch_stamp_[tet] = insertion_.stamp;
-  if (insertion_.touched != nullptr) insertion_.touched->push_back(tet);
+  if (tet_touch_stamp_[tet] == insertion().stamp) return;
+  tet_touch_stamp_[tet] = insertion().stamp;
+  if (insertion().touched != nullptr) insertion().touched->push_back(tet);
 }
 
 void CellComplex::touch_side(Side s) {
@@ -405,7 +404,6 @@ FacetId CellComplex::split_facet(FacetId f, PlaneId plane, CellId cell, CellId n
   for (std::size_t i = fall; i != rise; i = (i + 1) % n) negative.push_back(corners[i]);
   negative.push_back({a, chord});
 
-  const FacetId g = static_cast<FacetId>(facets_.size());
   Facet part = facets_[f];
   part.corners = std::move(negative);
   if (cell >= 0) {
@@ -413,12 +411,13 @@ FacetId CellComplex::split_facet(FacetId f, PlaneId plane, CellId cell, CellId n
     if (part.back == cell) part.back = negative_cell;
   }
   part.next_on_mesh_face = -1;
-  for (std::size_t k = 0; k + 1 < part.corners.size(); ++k) {
-    auto& list = edges_[part.corners[k].edge].facets;
+  const FacetId g = static_cast<FacetId>(facets_.push_back(std::move(part)) - facets_.begin());
+  const auto& moved = facets_[g].corners;
+  for (std::size_t k = 0; k + 1 < moved.size(); ++k) {
+    auto& list = edges_[moved[k].edge].facets;
     std::replace(list.begin(), list.end(), f, g);
   }
   edges_[chord].facets = {f, g};
-  facets_.push_back(std::move(part));
   facets_[f].corners = std::move(positive);
   if (facets_[g].mesh_face >= 0) {
     facets_[g].next_on_mesh_face = face_first_facet_[facets_[g].mesh_face];
@@ -458,14 +457,14 @@ CellId CellComplex::split(CellId cell, PlaneId plane, FacetId* section) {
   for (const FacetId f : old_facets) mark_crossings(f, plane);
 
   // 2. The negative part, linked after the cell in its tet's list.
-  const CellId negative_cell = static_cast<CellId>(cells_.size());
+  CellId negative_cell = -1;
   {
     Cell part;
     part.tet = cells_[cell].tet;
     part.material = cells_[cell].material;
     part.label = cells_[cell].label;
     part.next_in_tet = cells_[cell].next_in_tet;
-    cells_.push_back(std::move(part));
+    negative_cell = static_cast<CellId>(cells_.push_back(std::move(part)) - cells_.begin());
     cells_[cell].next_in_tet = negative_cell;
     cells_[cell].box_min = {1, 1, 1};  // the positive part is smaller now: recompute when asked
     cells_[cell].box_max = {0, 0, 0};
@@ -515,8 +514,11 @@ CellId CellComplex::split(CellId cell, PlaneId plane, FacetId* section) {
     }
   }
 
-  // 4. Chain the section's edges into its cycle. Edges on the plane were seen from both of their
-  //    facets, in the same direction; keep one copy.
+  // 4. Chain the section's edges into its cycle, from the first edge found (so that the cap's
+  //    first corner follows the cell's facet order, not the numbering of points). Edges on the
+  //    plane were seen from both of their facets, in the same direction; keep one copy.
+  if (section_edges.empty()) broken("the section of a split cell is empty");
+  const VertexId start = section_edges.front().from;
   std::sort(section_edges.begin(), section_edges.end(),
             [](const Directed& x, const Directed& y) { return x.from < y.from || (x.from == y.from && x.edge < y.edge); });
   section_edges.erase(std::unique(section_edges.begin(), section_edges.end(),
@@ -529,7 +531,6 @@ CellId CellComplex::split(CellId cell, PlaneId plane, FacetId* section) {
   cap.plane = plane;
   cap.front = cell;
   cap.back = negative_cell;
-  const VertexId start = section_edges.front().from;
   VertexId v = start;
   do {
     const auto it = std::lower_bound(section_edges.begin(), section_edges.end(), v,
@@ -543,9 +544,8 @@ CellId CellComplex::split(CellId cell, PlaneId plane, FacetId* section) {
   if (cap.corners.size() != section_edges.size() || cap.corners.size() < 3) {
     broken("the section of a split cell is not one closed polygon");
   }
-  const FacetId cap_id = static_cast<FacetId>(facets_.size());
-  for (const Corner& corner : cap.corners) edges_[corner.edge].facets.push_back(cap_id);
-  facets_.push_back(std::move(cap));
+  const FacetId cap_id = static_cast<FacetId>(facets_.push_back(std::move(cap)) - facets_.begin());
+  for (const Corner& corner : facets_[cap_id].corners) edges_[corner.edge].facets.push_back(cap_id);
   positive_facets.push_back(cap_id);
   negative_facets.push_back(cap_id);
   cells_[cell].facets = std::move(positive_facets);
@@ -558,10 +558,10 @@ CellId CellComplex::split(CellId cell, PlaneId plane, FacetId* section) {
 
 void CellComplex::cover(FacetId f) {
   Facet& facet = facets_[f];
-  if (facet.stamp == insertion_.stamp) return;
-  facet.stamp = insertion_.stamp;
-  if (facet.covering < 0) facet.covering = insertion_.stamp;
-  const OrientedPlane& plane = insertion_.triangle->plane;
+  if (facet.stamp == insertion().stamp) return;
+  facet.stamp = insertion().stamp;
+  if (facet.covering < 0) facet.covering = insertion().stamp;
+  const OrientedPlane& plane = insertion().triangle->plane;
   // The facet lies on the plane (its corners do, exactly); only the orientation is left, the sign
   // of the two normals' dot product, which is far from zero for equal planes.
   const int alignment = facet.plane == plane.id ? 1 : registry_->normal_alignment(facet.plane, plane.id);
@@ -571,12 +571,16 @@ void CellComplex::cover(FacetId f) {
   touch_side(facet.back);
 }
 
-bool CellComplex::cover_inside(FacetId f) {
+bool CellComplex::cover_inside(FacetId f, CellId cell) {
   // The facet lies on the triangle's plane; the triangle there is the part inside its three walls.
-  if (facets_[f].stamp == insertion_.stamp) return false;
+  if (facets_[f].stamp == insertion().stamp) return false;
+  if (insertion().front_covers_faces && facets_[f].mesh_face >= 0 && facets_[f].back == cell &&
+      side_is_material(facets_[f].front)) {
+    return false;  // the front side's tet covers it, before or after this one
+  }
   bool changed = false;
   FacetId inside = f;
-  for (const OrientedPlane& wall : insertion_.triangle->walls) {
+  for (const OrientedPlane& wall : insertion().triangle->walls) {
     const int position = classify_facet(inside, wall.id) * wall.sign;
     if (position == -1) return changed;  // outside the triangle, or touching its edge
     if (position != 0) continue;
@@ -589,23 +593,23 @@ bool CellComplex::cover_inside(FacetId f) {
 }
 
 bool CellComplex::process_cell(CellId cell) {
-  const PlaneId plane = insertion_.triangle->plane.id;
+  const PlaneId plane = insertion().triangle->plane.id;
   if (classify(cell, plane) == 0) {
     // The plane crosses the cell: split it there when the triangle covers part of the section.
     if (!section_overlaps_triangle(cell)) return false;
     FacetId section = -1;
     split(cell, plane, &section);
-    cover_inside(section);
+    cover_inside(section, cell);
     return true;
   }
   // The cell only touches the plane: what matters is a facet on it (a cut along an earlier cut
   // or along a tet face).
   std::vector<FacetId> on_plane;
   for (const FacetId f : cells_[cell].facets) {
-    if (facets_[f].stamp != insertion_.stamp && facet_on_plane(f, plane)) on_plane.push_back(f);
+    if (facets_[f].stamp != insertion().stamp && facet_on_plane(f, plane)) on_plane.push_back(f);
   }
   bool changed = false;
-  for (const FacetId f : on_plane) changed = cover_inside(f) || changed;
+  for (const FacetId f : on_plane) changed = cover_inside(f, cell) || changed;
   return changed;
 }
 
@@ -649,43 +653,132 @@ bool CellComplex::cell_misses_triangle_box(CellId cell) {
     }
   }
   for (int k = 0; k < 3; ++k) {
-    if (c.box_max[k] < insertion_.box_min[k] || c.box_min[k] > insertion_.box_max[k]) return true;
+    if (c.box_max[k] < insertion().box_min[k] || c.box_min[k] > insertion().box_max[k]) return true;
   }
   return false;
 }
 
+namespace {
+// The insertion in progress on this thread, or null (see CellComplex::insertion).
+thread_local void* active_insertion = nullptr;
+}  // namespace
+
+CellComplex::Insertion& CellComplex::insertion() { return *static_cast<Insertion*>(active_insertion); }
+
+CellComplex::InsertionScope::InsertionScope(CellComplex& c, Insertion& state, const PreparedTriangle& triangle,
+                                            std::int32_t stamp, std::vector<Index>* touched, bool front_covers_faces)
+    : complex(c) {
+  state = Insertion{};
+  state.stamp = stamp;
+  state.triangle = &triangle;
+  state.touched = touched;
+  state.front_covers_faces = front_covers_faces;
+  if (triangle.corners_are_inputs) {
+    state.has_box = true;
+    for (int k = 0; k < 3; ++k) {
+      state.box_min[k] = std::min({triangle.corners[0][k], triangle.corners[1][k], triangle.corners[2][k]});
+      state.box_max[k] = std::max({triangle.corners[0][k], triangle.corners[1][k], triangle.corners[2][k]});
+    }
+  }
+  active_insertion = &state;
+  complex.registry_->begin_memo({triangle.plane.id, triangle.walls[0].id, triangle.walls[1].id, triangle.walls[2].id});
+}
+
+CellComplex::InsertionScope::~InsertionScope() {
+  complex.registry_->end_memo();
+  active_insertion = nullptr;
+}
+
+void CellComplex::insert_into_tet(Index tet, std::int32_t label, std::vector<CellId>* scratch) {
+  if (!refined(tet)) {
+    if (!tet_material(tet) || (label >= 0 && tet_label_[tet] != label) || !tet_may_be_cut(tet)) return;
+    refine(tet);
+    touch(tet);  // its cells are new, even if the triangle then leaves them whole
+  }
+  scratch->clear();
+  for (CellId c = first_cell_[tet]; c >= 0; c = cells_[c].next_in_tet) scratch->push_back(c);
+  for (const CellId c : *scratch) {
+    if (!cells_[c].material || (label >= 0 && cells_[c].label != label)) continue;
+    if (insertion().has_box && cell_misses_triangle_box(c)) continue;
+    process_cell(c);
+  }
+}
+
 void CellComplex::insert_triangle(const PreparedTriangle& triangle, std::span<const Index> tets, std::int32_t label,
                                   std::vector<Index>* touched) {
-  insertion_ = Insertion{};
-  insertion_.stamp = static_cast<std::int32_t>(inserted_.size());
-  insertion_.triangle = &triangle;
-  insertion_.touched = touched;
-  if (triangle.corners_are_inputs) {
-    insertion_.has_box = true;
-    for (int k = 0; k < 3; ++k) {
-      insertion_.box_min[k] = std::min({triangle.corners[0][k], triangle.corners[1][k], triangle.corners[2][k]});
-      insertion_.box_max[k] = std::max({triangle.corners[0][k], triangle.corners[1][k], triangle.corners[2][k]});
-    }
-  }
+  const auto stamp = static_cast<std::int32_t>(inserted_.size());
   inserted_.push_back({triangle.plane, triangle.walls, triangle.cut_id});
-  registry_->begin_memo({triangle.plane.id, triangle.walls[0].id, triangle.walls[1].id, triangle.walls[2].id});
-  std::vector<CellId> cells;
-  for (const Index tet : tets) {
-    if (!refined(tet)) {
-      if (!tet_material(tet) || (label >= 0 && tet_label_[tet] != label) || !tet_may_be_cut(tet)) continue;
-      refine(tet);
-      touch(tet);  // its cells are new, even if the triangle then leaves them whole
-    }
-    cells.clear();
-    for (CellId c = first_cell_[tet]; c >= 0; c = cells_[c].next_in_tet) cells.push_back(c);
-    for (const CellId c : cells) {
-      if (!cells_[c].material || (label >= 0 && cells_[c].label != label)) continue;
-      if (insertion_.has_box && cell_misses_triangle_box(c)) continue;
-      process_cell(c);
+  Insertion state;
+  const InsertionScope scope(*this, state, triangle, stamp, touched, false);
+  std::vector<CellId> scratch;
+  for (const Index tet : tets) insert_into_tet(tet, label, &scratch);
+}
+
+void CellComplex::insert_triangles(std::span<const PreparedTriangle> triangles, std::span<const std::vector<Index>> tets,
+                                   std::vector<Index>* touched) {
+  if (triangles.size() != tets.size()) throw std::invalid_argument("insert_triangles: one list of tets per triangle");
+  const auto first_stamp = static_cast<std::int32_t>(inserted_.size());
+  for (const PreparedTriangle& t : triangles) inserted_.push_back({t.plane, t.walls, t.cut_id});
+
+  // Blocks of side 5 L, where L bounds every edge (see the header for why 5).
+  const Points& x = mesh_->rest();
+  const Tets& elements = mesh_->tets();
+  if (longest_edge_ < 0) {
+    longest_edge_ = 0;
+    for (Index t = 0; t < mesh_->num_tets(); ++t) {
+      for (const auto& e : kTetEdges) {
+        longest_edge_ = std::max(longest_edge_, (x.row(elements(t, e[0])) - x.row(elements(t, e[1]))).norm());
+      }
     }
   }
-  registry_->end_memo();
-  insertion_ = Insertion{};
+  const double side = 5 * longest_edge_ * (1 + 1e-9);
+  const Vec3 origin = x.colwise().minCoeff().transpose();
+  struct Pair {
+    std::int32_t triangle;
+    Index tet;
+  };
+  std::unordered_map<std::uint64_t, std::size_t> block_of_key;
+  std::vector<std::vector<Pair>> blocks;
+  std::array<std::vector<std::size_t>, 8> blocks_of_colour;
+  for (std::size_t i = 0; i < triangles.size(); ++i) {
+    for (const Index tet : tets[i]) {
+      Vec3 centroid = Vec3::Zero();
+      for (int k = 0; k < 4; ++k) centroid += x.row(elements(tet, k)).transpose();
+      std::uint64_t key = 0;
+      int colour = 0;
+      for (int k = 0; k < 3; ++k) {
+        const auto b = static_cast<std::uint64_t>(std::floor((centroid[k] / 4 - origin[k]) / side));
+        key = (key << 21) | (b & 0x1fffff);
+        colour |= static_cast<int>(b & 1) << k;
+      }
+      const auto [it, added] = block_of_key.try_emplace(key, blocks.size());
+      if (added) {
+        blocks.emplace_back();
+        blocks_of_colour[colour].push_back(it->second);
+      }
+      blocks[it->second].push_back({static_cast<std::int32_t>(i), tet});
+    }
+  }
+
+  // Each block inserts its triangles in order into its own tets; the blocks of one colour at once.
+  std::vector<std::vector<Index>> block_touched(blocks.size());
+  for (const std::vector<std::size_t>& colour : blocks_of_colour) {
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, colour.size(), 1), [&](const auto& range) {
+      std::vector<CellId> scratch;
+      for (std::size_t b = range.begin(); b != range.end(); ++b) {
+        const std::vector<Pair>& pairs = blocks[colour[b]];
+        for (std::size_t begin = 0; begin < pairs.size();) {
+          const std::int32_t i = pairs[begin].triangle;
+          Insertion state;
+          const InsertionScope scope(*this, state, triangles[i], first_stamp + i, &block_touched[colour[b]], true);
+          for (; begin < pairs.size() && pairs[begin].triangle == i; ++begin) insert_into_tet(pairs[begin].tet, -1, &scratch);
+        }
+      }
+    });
+  }
+  if (touched != nullptr) {
+    for (const std::vector<Index>& list : block_touched) touched->insert(touched->end(), list.begin(), list.end());
+  }
 }
 
 // ---- Measures and checks -----------------------------------------------------------------------

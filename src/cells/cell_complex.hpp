@@ -32,6 +32,8 @@
 #include <string>
 #include <vector>
 
+#include <tbb/concurrent_vector.h>
+
 #include "registry/intersection_registry.hpp"
 
 namespace tetcut::cells {
@@ -149,6 +151,26 @@ class CellComplex {
     insert_triangle(prepare(triangle), tets, -1, touched);
   }
 
+  /// Inserts a batch of prepared triangles into every cell (label -1), triangle `i` into the tets
+  /// `tets[i]` (as for insert_triangle), using the threads of the current TBB arena. The result
+  /// has the same cells and covered polygons as inserting the triangles one by one in order; only
+  /// the numbering of cells, facets, edges and points, and the corner a facet starts at, differ
+  /// (and do not depend on the threads' timing). Appends the touched tets to `touched`, in no
+  /// particular order and possibly repeated.
+  ///
+  /// Why it is safe: inserting into tet A writes only records of A and of the tets sharing a node
+  /// with A (facets on A's faces and their neighbours' facet lists, points on A's edges and the
+  /// facets around them). Tets are grouped into cubic blocks of side 5 L (L the longest mesh edge)
+  /// by their centroids, and the blocks coloured by the parity of their coordinates: two tets in
+  /// different blocks of one colour have centroids more than 5 L apart along an axis, while a tet
+  /// sharing a node with both would put them within 4.5 L. So the blocks of one colour run at
+  /// once, each inserting its triangles in order into its own tets. A facet on a mesh face is
+  /// covered by the tet on its front side alone (when that side holds material, which then always
+  /// inserts the triangle too), since the two tets may insert the triangle at different times.
+  /// Cost: that of the insertions, over the threads, plus O(pairs of triangle and tet).
+  void insert_triangles(std::span<const PreparedTriangle> triangles, std::span<const std::vector<Index>> tets,
+                        std::vector<Index>* touched);
+
   /// The caller's id of the cut triangle that first covered a facet, or -1.
   std::int32_t cut_id(const Facet& facet) const {
     return facet.covering < 0 ? -1 : inserted_[facet.covering].cut_id;
@@ -185,9 +207,11 @@ class CellComplex {
 
   const TetMesh& mesh() const { return *mesh_; }
   const registry::IntersectionRegistry& registry() const { return *registry_; }
-  const std::vector<Cell>& cells() const { return cells_; }
-  const std::vector<Facet>& facets() const { return facets_; }
-  const std::vector<Edge>& edges() const { return edges_; }
+  /// Concurrent vectors: the parallel insertion appends from several threads, and their elements
+  /// never move.
+  const tbb::concurrent_vector<Cell>& cells() const { return cells_; }
+  const tbb::concurrent_vector<Facet>& facets() const { return facets_; }
+  const tbb::concurrent_vector<Edge>& edges() const { return edges_; }
 
   /// The tet on side `s` of a facet, or -1 for the outside.
   Index tet_of(Side s) const;
@@ -228,6 +252,9 @@ class CellComplex {
   int corner_side(int k, PlaneId plane) const;
   /// Splits and covers inside one cell; returns whether anything changed.
   bool process_cell(CellId cell);
+  /// Inserts the current triangle into the cells of one tet labelled `label` (any when -1),
+  /// refining the tet first when the triangle may cut it. `scratch` is reused storage.
+  void insert_into_tet(Index tet, std::int32_t label, std::vector<CellId>* scratch);
 
   /// -1, 0 or +1 when every vertex of the cell is <= 0, some are on each side, or all are >= 0
   /// (2 when all are on the plane, impossible for a cell with volume).
@@ -240,8 +267,9 @@ class CellComplex {
   /// (exact separating-axis test in that plane). The cell must cross the plane.
   bool section_overlaps_triangle(CellId cell) const;
   /// Covers the part of facet `f` (on the triangle's plane) inside the triangle, splitting the
-  /// facet along the triangle's edges within its plane. Returns whether anything changed.
-  bool cover_inside(FacetId f);
+  /// facet along the triangle's edges within its plane, on behalf of `cell` (one of its sides).
+  /// Returns whether anything changed.
+  bool cover_inside(FacetId f, CellId cell);
 
   /// Splits `cell` by `plane` when the plane passes through its interior. The part on the positive
   /// side keeps the id `cell`; returns the id of the negative part, or -1 when nothing was split.
@@ -266,9 +294,9 @@ class CellComplex {
 
   const TetMesh* mesh_;
   registry::IntersectionRegistry* registry_;
-  std::vector<Cell> cells_;
-  std::vector<Facet> facets_;
-  std::vector<Edge> edges_;
+  tbb::concurrent_vector<Cell> cells_;
+  tbb::concurrent_vector<Facet> facets_;
+  tbb::concurrent_vector<Edge> edges_;
   std::vector<CellId> first_cell_;         // per tet
   std::vector<std::uint8_t> tet_material_; // per tet, for unrefined tets
   std::vector<FacetId> face_first_facet_;  // per mesh face
@@ -276,22 +304,38 @@ class CellComplex {
   std::vector<EdgeId> mesh_edge_first_;    // per mesh edge
   std::vector<VertexId> node_vertex_;      // per mesh node, -1 until needed
   std::vector<std::int32_t> tet_label_;    // per tet, for unrefined tets
+  double longest_edge_ = -1;               // of the mesh, once insert_triangles needs it
 
-  // The insertion in progress; its stamp is its index in inserted_.
   /// Whether the cell certainly misses the box of the triangle being inserted (rest-space
   /// triangles, whose corners are inputs): a sound filter before the exact tests, as the cell's box
   /// holds its exact corners. Most cells of a tet crossed by many small triangles (an embedded
   /// scan) are far from each one.
   bool cell_misses_triangle_box(CellId cell);
 
+  // The insertion in progress on this thread (several run at once in insert_triangles): reached
+  // through a thread-local pointer, set for the duration of one triangle's insertion. Its stamp is
+  // the triangle's index in inserted_.
   struct Insertion {
     std::int32_t stamp = -1;
     const PreparedTriangle* triangle = nullptr;
     std::vector<Index>* touched = nullptr;
     bool has_box = false;
     std::array<double, 3> box_min{}, box_max{};
+    /// A facet on a mesh face is covered only on behalf of its front side when that side holds
+    /// material (insert_triangles); otherwise by whichever side comes first, by the stamps.
+    bool front_covers_faces = false;
   };
-  Insertion insertion_;
+  static Insertion& insertion();
+  /// Sets up `state` for inserting `triangle` with stamp `stamp` on this thread; the returned
+  /// guard ends it (and the registry's memo) when it goes out of scope, exceptions included.
+  struct InsertionScope {
+    InsertionScope(CellComplex& complex, Insertion& state, const PreparedTriangle& triangle, std::int32_t stamp,
+                   std::vector<Index>* touched, bool front_covers_faces);
+    ~InsertionScope();
+    InsertionScope(const InsertionScope&) = delete;
+    InsertionScope& operator=(const InsertionScope&) = delete;
+    CellComplex& complex;
+  };
   // Every insertion's plane, walls and cut id: facets name the insertion that covered them, and
   // validate() checks they lie inside its triangle.
   struct InsertedTriangle {

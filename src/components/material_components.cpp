@@ -67,7 +67,6 @@ MaterialComponents find_components(const CellComplex& complex) {
   result.count.assign(static_cast<std::size_t>(num_tets), 0);
   result.cell_component.assign(complex.cells().size(), -1);
   result.cell_volume6.assign(complex.cells().size(), 0.0);
-  complex.registry().update_positions();
   tbb::parallel_for(tbb::blocked_range<Index>(0, num_tets, 256), [&](const auto& range) {
     for (Index t = range.begin(); t != range.end(); ++t) tet_components(complex, t, &result);
   });
@@ -78,7 +77,6 @@ void update_components(const CellComplex& complex, std::span<const Index> tets, 
   result->count.resize(static_cast<std::size_t>(complex.mesh().num_tets()), 0);
   result->cell_component.resize(complex.cells().size(), -1);
   result->cell_volume6.resize(complex.cells().size(), 0.0);
-  complex.registry().update_positions();
   // A batch touches tens of tets: waking threads would cost more than the work.
   if (tets.size() < kParallelFrom) {
     for (const Index t : tets) tet_components(complex, t, result);

@@ -26,6 +26,7 @@
 #include "surface/material_surface.hpp"
 
 #include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
 
 namespace tetcut {
 namespace {
@@ -61,29 +62,46 @@ const std::vector<Index>& Cutter::tet_parent() const { return state_->copies.cop
 void Cutter::State::insert_rest(const TriangleSurface& batch, CutBatchReport* report, std::vector<Index>* touched) {
   check_batch(batch);
   report->triangles = batch.num_triangles();
-  std::vector<Index> candidates;
+  std::vector<cells::PreparedTriangle> prepared;
+  std::vector<std::array<Vec3, 3>> corners;
   for (Index i = 0; i < batch.num_triangles(); ++i) {
-    const std::array<Vec3, 3> corners = corners_of(batch, i);
+    const std::array<Vec3, 3> x = corners_of(batch, i);
     const std::int32_t id = next_id(batch.num_triangles() - i);
-    if (geometry::collinear(corners[0], corners[1], corners[2])) {
+    if (geometry::collinear(x[0], x[1], x[2])) {
       report->degenerate.push_back(i);
       continue;
     }
     cells::PreparedTriangle t;
     t.cut_id = id;
     t.corners_are_inputs = true;
-    t.corners = corners;
-    const PlaneBook::Found plane = planes.triangle_plane(geometry::Plane::through(corners[0], corners[1], corners[2]), 4 * std::int64_t{id});
+    t.corners = x;
+    const PlaneBook::Found plane = planes.triangle_plane(geometry::Plane::through(x[0], x[1], x[2]), 4 * std::int64_t{id});
     t.plane = {planes.per_copy(plane.key, -1, [&] { return registry.add_plane(*plane.plane); }), plane.sign};
     const int axis = geometry::wall_axis(*plane.plane);
     for (int e = 0; e < 3; ++e) {
       // Rest-space walls come from the registry, which keeps one per edge and axis across batches.
-      t.walls[e] = registry.wall(corners[e], corners[(e + 1) % 3], axis, corners[(e + 2) % 3]);
+      t.walls[e] = registry.wall(x[e], x[(e + 1) % 3], axis, x[(e + 2) % 3]);
     }
-    candidates.clear();
-    rest_tets.query(box_of(corners), &candidates);
-    complex.insert_triangle(t, candidates, -1, touched);
+    prepared.push_back(t);
+    corners.push_back(x);
   }
+  // Large batches (an embedded surface) go to the parallel insertion; a progressive cut's few
+  // triangles would not repay waking the threads.
+  constexpr std::size_t kParallelFrom = 256;
+  if (prepared.size() < kParallelFrom || tbb::this_task_arena::max_concurrency() < 2) {
+    std::vector<Index> candidates;
+    for (std::size_t i = 0; i < prepared.size(); ++i) {
+      candidates.clear();
+      rest_tets.query(box_of(corners[i]), &candidates);
+      complex.insert_triangle(prepared[i], candidates, -1, touched);
+    }
+    return;
+  }
+  std::vector<std::vector<Index>> candidates(prepared.size());
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, prepared.size(), 1024), [&](const auto& range) {
+    for (std::size_t i = range.begin(); i != range.end(); ++i) rest_tets.query(box_of(corners[i]), &candidates[i]);
+  });
+  complex.insert_triangles(prepared, candidates, touched);
 }
 
 void Cutter::State::rebuild_copies() {
@@ -272,7 +290,6 @@ CutResult Cutter::result() {
   const auto seconds_since = [](Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); };
   State& s = *state_;
   auto start = Clock::now();
-  s.registry.update_positions();
   const connectivity::Pieces pieces = connectivity::find_pieces(s.complex, s.components, s.copies);
   CutResult result;
   CutMesh& out = result.mesh;

@@ -1,7 +1,5 @@
 #include "registry/intersection_registry.hpp"
 
-#include <tbb/parallel_for.h>
-
 #include <algorithm>
 #include <bit>
 #include <stdexcept>
@@ -37,8 +35,12 @@ std::size_t IntersectionRegistry::KeyHash::operator()(const PointsKey& key) cons
 }
 
 PlaneId IntersectionRegistry::add_plane(const Plane& plane) {
-  planes_.push_back(plane);
-  return static_cast<PlaneId>(planes_.size() - 1);
+  return static_cast<PlaneId>(planes_.push_back(plane) - planes_.begin());
+}
+
+VertexId IntersectionRegistry::push_vertex(Vertex vertex) {
+  vertex.position = compute_position(vertex);
+  return static_cast<VertexId>(vertices_.push_back(vertex) - vertices_.begin());
 }
 
 OrientedPlane IntersectionRegistry::triangle_plane(const Vec3& a, const Vec3& b, const Vec3& c) {
@@ -86,8 +88,7 @@ VertexId IntersectionRegistry::add_point(PlaneId a, PlaneId b, PlaneId c) {
   v.planes = {a, b, c};
   v.homogeneous = geometry::tpi_homogeneous(planes_[a], planes_[b], planes_[c]);
   v.orientation = static_cast<std::int8_t>(orientation);
-  vertices_.push_back(v);
-  return static_cast<VertexId>(vertices_.size() - 1);
+  return push_vertex(v);
 }
 
 VertexId IntersectionRegistry::add_node(Index node, PlaneId a, PlaneId b, PlaneId c) {
@@ -96,8 +97,7 @@ VertexId IntersectionRegistry::add_node(Index node, PlaneId a, PlaneId b, PlaneI
   v.homogeneous = geometry::explicit_homogeneous(rest_->row(node).transpose());
   v.orientation = 1;
   v.node = node;
-  vertices_.push_back(v);
-  return static_cast<VertexId>(vertices_.size() - 1);
+  return push_vertex(v);
 }
 
 const geometry::ExactPlane& IntersectionRegistry::exact_plane(PlaneId p) const {
@@ -323,65 +323,61 @@ int IntersectionRegistry::side_of_meet(PlaneId a, PlaneId b, PlaneId c, PlaneId 
   return geometry::exact_side(exact_plane(q), geometry::exact_tpi(exact_plane(a), exact_plane(b), exact_plane(c)));
 }
 
+namespace {
+// The memo active on this thread (set by begin_memo, cleared by end_memo), or null.
+thread_local void* active_memo = nullptr;
+}  // namespace
+
 int IntersectionRegistry::side(VertexId v, PlaneId q) const {
+  Memo* memo = static_cast<Memo*>(active_memo);
+  if (memo == nullptr || memo->owner != this) return compute_side(v, q);
   int slot = 0;
-  while (slot < 4 && memo_planes_[slot] != q) ++slot;
+  while (slot < 4 && memo->planes[slot] != q) ++slot;
   if (slot == 4) return compute_side(v, q);
-  if (memo_vertex_stamp_.size() <= static_cast<std::size_t>(v)) {
+  if (memo->vertex_stamp.size() <= static_cast<std::size_t>(v)) {
     // Grow geometrically: vertices are added during an insertion.
-    const std::size_t size = std::max(vertices_.size(), 2 * memo_vertex_stamp_.size());
-    memo_vertex_stamp_.resize(size, 0);
-    memo_sides_.resize(size);
+    const std::size_t size = std::max<std::size_t>(vertices_.size(), 2 * memo->vertex_stamp.size());
+    memo->vertex_stamp.resize(size, 0);
+    memo->sides.resize(size);
   }
-  if (memo_vertex_stamp_[v] != memo_stamp_) {
-    memo_vertex_stamp_[v] = memo_stamp_;
-    memo_sides_[v] = {kUnknown, kUnknown, kUnknown, kUnknown};
+  if (memo->vertex_stamp[v] != memo->stamp) {
+    memo->vertex_stamp[v] = memo->stamp;
+    memo->sides[v] = {kUnknown, kUnknown, kUnknown, kUnknown};
   }
-  std::int8_t& memo = memo_sides_[v][slot];
-  if (memo == kUnknown) memo = static_cast<std::int8_t>(compute_side(v, q));
-  return memo;
+  std::int8_t& side = memo->sides[v][slot];
+  if (side == kUnknown) side = static_cast<std::int8_t>(compute_side(v, q));
+  return side;
 }
 
 void IntersectionRegistry::begin_memo(std::initializer_list<PlaneId> planes) {
-  memo_planes_ = {-1, -1, -1, -1};
+  Memo& memo = memos_.local();
+  memo.owner = this;
+  memo.planes = {-1, -1, -1, -1};
   int slot = 0;
   for (const PlaneId p : planes) {
     if (slot == 4) throw std::logic_error("registry: at most four memoised planes");
-    memo_planes_[slot++] = p;
+    memo.planes[slot++] = p;
   }
-  ++memo_stamp_;
-  if (memo_stamp_ == 0) {
+  ++memo.stamp;
+  if (memo.stamp == 0) {
     // Wrapped after four billion insertions: forget every old stamp.
-    std::fill(memo_vertex_stamp_.begin(), memo_vertex_stamp_.end(), 0);
-    memo_stamp_ = 1;
+    std::fill(memo.vertex_stamp.begin(), memo.vertex_stamp.end(), 0);
+    memo.stamp = 1;
   }
+  active_memo = &memo;
 }
 
-void IntersectionRegistry::end_memo() { memo_planes_ = {-1, -1, -1, -1}; }
+void IntersectionRegistry::end_memo() { active_memo = nullptr; }
 
-void IntersectionRegistry::compute_position(VertexId v) const {
-  const Vertex& vertex = vertices_[v];
-  Vec3& x = positions_[v];
-  if (vertex.node >= 0) {
-    x = rest_->row(vertex.node).transpose();
-  } else if (!geometry::rounded_coordinates(vertex.homogeneous, &x)) {
-    // Ill-conditioned: round the exact coordinates. The exact point is computed here rather than
-    // through the cache, since update_positions runs this in parallel.
-    const geometry::ExactPoint exact = geometry::exact_tpi(geometry::exact_plane(planes_[vertex.planes[0]]),
-                                                           geometry::exact_plane(planes_[vertex.planes[1]]),
-                                                           geometry::exact_plane(planes_[vertex.planes[2]]));
-    x = geometry::rounded_exact(exact);
-  }
-  has_position_[v] = 1;
-}
-
-const Vec3& IntersectionRegistry::position(VertexId v) const {
-  if (positions_.size() < vertices_.size()) {
-    positions_.resize(vertices_.size());
-    has_position_.resize(vertices_.size(), 0);
-  }
-  if (!has_position_[v]) compute_position(v);
-  return positions_[v];
+Vec3 IntersectionRegistry::compute_position(const Vertex& vertex) const {
+  if (vertex.node >= 0) return rest_->row(vertex.node).transpose();
+  Vec3 x;
+  if (geometry::rounded_coordinates(vertex.homogeneous, &x)) return x;
+  // Ill-conditioned: round the exact coordinates. The exact point is computed here rather than
+  // through the cache, which would keep it for a point that needs it only once.
+  return geometry::rounded_exact(geometry::exact_tpi(geometry::exact_plane(planes_[vertex.planes[0]]),
+                                                     geometry::exact_plane(planes_[vertex.planes[1]]),
+                                                     geometry::exact_plane(planes_[vertex.planes[2]])));
 }
 
 std::array<mpq_class, 3> IntersectionRegistry::exact_position(VertexId v) const {
@@ -394,26 +390,5 @@ std::array<mpq_class, 3> IntersectionRegistry::exact_position(VertexId v) const 
 }
 
 double IntersectionRegistry::position_tolerance() { return geometry::kCoordinateTolerance; }
-
-void IntersectionRegistry::update_positions() const {
-  if (positions_.size() < vertices_.size()) {
-    positions_.resize(vertices_.size());
-    has_position_.resize(vertices_.size(), 0);
-  }
-  const auto fill = [&](VertexId begin, VertexId end) {
-    for (VertexId v = begin; v != end; ++v) {
-      if (!has_position_[v]) compute_position(v);
-    }
-  };
-  // A batch adds a few hundred points: waking threads would cost more than the work.
-  constexpr VertexId kParallelFrom = 4096;
-  if (num_vertices() - positions_done_ < kParallelFrom) {
-    fill(positions_done_, num_vertices());
-  } else {
-    tbb::parallel_for(tbb::blocked_range<VertexId>(positions_done_, num_vertices(), 1024),
-                      [&](const auto& range) { fill(range.begin(), range.end()); });
-  }
-  positions_done_ = num_vertices();
-}
 
 }  // namespace tetcut::registry

@@ -13,10 +13,11 @@
 // inside one of its edges, where no other point can be, and it recognises a point that a new triple
 // names by an exact side test returning zero.
 //
-// Threads: insertion (add_*, begin_memo/end_memo, and side tests while a memo is active) is
-// sequential. Outside an insertion, side tests may run concurrently: their exact caches are filled
-// under a lock (the exact path is rare). After update_positions(), position() and exact_position()
-// only read, and may be called concurrently too.
+// Threads: add_point, add_node and add_plane may run concurrently with each other and with reads
+// (planes and points live in concurrent vectors, whose elements never move), and so may side
+// tests: their exact caches are filled under a lock (the exact path is rare), and each thread has
+// its own memo (begin_memo/end_memo). triangle_plane and wall, which look up equal planes, are
+// sequential. A point's rounded position is computed when it is added, so position() only reads.
 
 #include <tetcut/types.hpp>
 
@@ -26,6 +27,8 @@
 #include <initializer_list>
 #include <memory>
 #include <mutex>
+#include <tbb/concurrent_vector.h>
+#include <tbb/enumerable_thread_specific.h>
 #include <unordered_map>
 #include <vector>
 
@@ -48,6 +51,7 @@ struct Vertex {
   geometry::Homogeneous homogeneous{};
   std::int8_t orientation = 1;  ///< sign of the homogeneous W
   Index node = -1;              ///< the mesh node, for input points; -1 for intersections
+  Vec3 position = Vec3::Zero(); ///< rounded coordinates (see IntersectionRegistry::position)
 };
 
 class IntersectionRegistry {
@@ -87,31 +91,32 @@ class IntersectionRegistry {
   /// exact path, to settle the commonest zeros (corners and edges shared by a surface's triangles).
   bool on_plane_by_construction(VertexId v, PlaneId q) const;
 
-  /// Coordinates of v, correctly rounded or nearly (geometry::tpi_coordinates). For output only.
-  const Vec3& position(VertexId v) const;
+  /// Coordinates of v, correctly rounded or nearly (geometry::tpi_coordinates). For output and
+  /// for sound filters widened by position_tolerance(), never for decisions.
+  const Vec3& position(VertexId v) const { return vertices_[v].position; }
   /// Exact rational coordinates of v (slow: for measurements rounding cannot settle). Uses no
   /// cache, so it is safe to call concurrently.
   std::array<mpq_class, 3> exact_position(VertexId v) const;
   /// Bound on the error of each rounded coordinate of position(), relative to the position's
   /// largest coordinate (see geometry::tpi_coordinates).
   static double position_tolerance();
-  /// Computes every missing position, in parallel, so position() is then a plain read. Only the
-  /// vertices added since the last call are visited: O(new vertices).
-  void update_positions() const;
 
   const geometry::Plane& plane(PlaneId p) const { return planes_[p]; }
   const Vertex& vertex(VertexId v) const { return vertices_[v]; }
   PlaneId num_planes() const { return static_cast<PlaneId>(planes_.size()); }
   VertexId num_vertices() const { return static_cast<VertexId>(vertices_.size()); }
 
-  /// Memoises side tests against up to four planes (one cut triangle's plane and walls) until
-  /// end_memo: the splits of one insertion ask the same vertex many times.
+  /// Memoises this thread's side tests against up to four planes (one cut triangle's plane and
+  /// walls) until end_memo on the same thread: the splits of one insertion ask the same vertex
+  /// many times. Each thread has its own memo, so insertions into disjoint cells may run at once.
   void begin_memo(std::initializer_list<PlaneId> planes);
   void end_memo();
 
  private:
+  struct Memo;
   int compute_side(VertexId v, PlaneId q) const;
-  void compute_position(VertexId v) const;
+  Vec3 compute_position(const Vertex& vertex) const;
+  VertexId push_vertex(Vertex vertex);
   // Exact forms, computed when a filter first fails and kept: later exact tests on the same plane
   // or point are then a four-term integer dot product.
   const geometry::ExactPlane& exact_plane(PlaneId p) const;
@@ -126,23 +131,26 @@ class IntersectionRegistry {
   };
 
   const Points* rest_;
-  std::vector<geometry::Plane> planes_;
-  std::vector<Vertex> vertices_;
+  tbb::concurrent_vector<geometry::Plane> planes_;
+  tbb::concurrent_vector<Vertex> vertices_;
   mutable std::mutex exact_mutex_;  // guards the two caches below
   mutable std::vector<std::unique_ptr<geometry::ExactPlane>> exact_planes_;
   mutable std::vector<std::unique_ptr<geometry::ExactPoint>> exact_points_;
-  mutable std::vector<Vec3> positions_;
-  mutable std::vector<std::uint8_t> has_position_;
-  mutable VertexId positions_done_ = 0;  // update_positions() has filled every vertex below this
   std::unordered_map<PointsKey, PlaneId, KeyHash> triangle_planes_;
   std::unordered_map<PointsKey, PlaneId, KeyHash> walls_;
 
-  // Memo: per vertex, the insertion stamp and the four sides (kUnknown until computed).
+  // Memo of one thread: per vertex, the stamp of the memo's current planes and the four sides
+  // (kUnknown until computed). The active memo of a thread is reached through a thread-local
+  // pointer, set by begin_memo and cleared by end_memo.
   static constexpr std::int8_t kUnknown = 2;
-  std::array<PlaneId, 4> memo_planes_{-1, -1, -1, -1};
-  std::uint32_t memo_stamp_ = 0;
-  mutable std::vector<std::uint32_t> memo_vertex_stamp_;
-  mutable std::vector<std::array<std::int8_t, 4>> memo_sides_;
+  struct Memo {
+    const IntersectionRegistry* owner = nullptr;
+    std::array<PlaneId, 4> planes{-1, -1, -1, -1};
+    std::uint32_t stamp = 0;
+    std::vector<std::uint32_t> vertex_stamp;
+    std::vector<std::array<std::int8_t, 4>> sides;
+  };
+  mutable tbb::enumerable_thread_specific<Memo> memos_;
 };
 
 }  // namespace tetcut::registry

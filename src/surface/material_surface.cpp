@@ -399,7 +399,6 @@ MaterialSurface SurfacePatches::assemble(const CellComplex& complex, const conne
   State& s = *state_;
   const TetMesh& mesh = complex.mesh();
   const registry::IntersectionRegistry& reg = complex.registry();
-  reg.update_positions();
   const Keys keys(complex, copies);
 
   // 1. Rebuild the out-of-date patches: in parallel, a chunk at a time (bounding the memory of
