@@ -47,11 +47,13 @@ void tet_components(const CellComplex& complex, Index tet, MaterialComponents* r
   std::int32_t count = 0;
   for (std::size_t i = 0; i < members.size(); ++i) {
     const CellId c = members[i];
-    result->cell_volume6[c] = complex.cell_volume6(c, origin);
     if (!cells[c].material) {
+      // Only material volumes are asked for (copies, pieces); a void cell's would cost as much.
+      result->cell_volume6[c] = 0;
       result->cell_component[c] = -1;
       continue;
     }
+    result->cell_volume6[c] = complex.cell_volume6(c, origin);
     const std::int32_t root = find(static_cast<std::int32_t>(i));
     if (label[root] < 0) label[root] = count++;
     result->cell_component[c] = label[root];

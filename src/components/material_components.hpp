@@ -17,8 +17,9 @@ struct MaterialComponents {
   /// Per cell of the complex: its component's index within its tet, or -1 for a cell without
   /// material.
   std::vector<std::int32_t> cell_component;
-  /// Per cell: six times its volume, from rounded positions relative to its tet's first node (see
-  /// CellComplex::cell_volume6), so that the cells of a tet add up to the tet.
+  /// Per cell holding material: six times its volume, from rounded positions relative to its tet's
+  /// first node (see CellComplex::cell_volume6), so that the cells of a tet add up to the tet;
+  /// zero for a cell without material.
   std::vector<double> cell_volume6;
   /// Per tet: number of components. An unrefined tet has one when it holds material, else none.
   std::vector<std::int32_t> count;

@@ -256,7 +256,7 @@ int side_of_point(const Plane& plane, const Vec3& x) { return side_of_point(plan
 
 int side_of_point(const Plane& q, const Vec3& x, const Homogeneous& h) {
   const auto& p = q.approx();
-  const int s = certain_sign(p[0] * h[0] + p[1] * h[1] + p[2] * h[2] + p[3]);
+  const int s = dot4_sign(p, h);
   if (s != 2) return s;
   return exact_side(exact_plane(q), exact_point(x));
 }
@@ -329,7 +329,7 @@ Homogeneous explicit_homogeneous(const Vec3& x) {
 int side_of_tpi(const Plane& a, const Plane& b, const Plane& c, const Homogeneous& h, int orientation,
                 const Plane& q) {
   const auto& p = q.approx();
-  const int s = certain_sign(p[0] * h[0] + p[1] * h[1] + p[2] * h[2] + p[3] * h[3]);
+  const int s = dot4_sign(p, h);
   if (s != 2) return s * orientation;
   return exact_side(exact_plane(q), exact_tpi(exact_plane(a), exact_plane(b), exact_plane(c)));
 }

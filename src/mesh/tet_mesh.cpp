@@ -7,6 +7,8 @@
 #include <string>
 #include <utility>
 
+#include <tbb/parallel_sort.h>
+
 #include "geometry/predicates.hpp"
 
 namespace tetcut {
@@ -33,9 +35,10 @@ void check_finite(const Points& points, const std::string& source, const char* w
 
 // Sorts each key's entries and assigns ids to unique keys. `keys` holds (key, owner slot) pairs;
 // returns, for each owner slot, the id of its key, and fills `unique` with the distinct keys.
+// The pairs are distinct (slots are), so the parallel sort's order is the one total order.
 template <typename Key>
 std::vector<Index> number_keys(std::vector<std::pair<Key, Index>>& keys, std::vector<Key>& unique) {
-  std::sort(keys.begin(), keys.end());
+  tbb::parallel_sort(keys.begin(), keys.end());
   std::vector<Index> id_of_slot(keys.size());
   unique.clear();
   for (std::size_t i = 0; i < keys.size(); ++i) {

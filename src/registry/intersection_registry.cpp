@@ -271,7 +271,7 @@ int IntersectionRegistry::compute_side(VertexId v, PlaneId q) const {
   // q . (X, Y, Z, W) = det4 of the point's three planes and q (W = 1 for an input point).
   const auto& p = planes_[q].approx();
   const auto& h = vertex.homogeneous;
-  const int s = geometry::certain_sign(p[0] * h[0] + p[1] * h[1] + p[2] * h[2] + p[3] * h[3]);
+  const int s = geometry::dot4_sign(p, h);
   if (s != 2) return s * vertex.orientation;
   if (on_plane_by_construction(v, q)) return 0;
   if (vertex.node < 0) {
@@ -293,9 +293,7 @@ int IntersectionRegistry::normal_alignment(PlaneId a, PlaneId b) const {
 
 int IntersectionRegistry::side_of_input(PlaneId q, const Vec3& x) const {
   const auto& p = planes_[q].approx();
-  using geometry::Approx;
-  const int s = geometry::certain_sign(p[0] * Approx::exact(x[0]) + p[1] * Approx::exact(x[1]) +
-                                       p[2] * Approx::exact(x[2]) + p[3]);
+  const int s = geometry::dot4_sign(p, geometry::explicit_homogeneous(x));
   if (s != 2) return s;
   if (defines(planes_[q], x)) return 0;
   return geometry::exact_side(exact_plane(q), geometry::exact_point(x));
@@ -305,7 +303,7 @@ int IntersectionRegistry::side(VertexId v, const Plane& q) const {
   const auto& p = q.approx();
   const Vertex& vertex = vertices_[v];
   const auto& h = vertex.homogeneous;
-  const int s = geometry::certain_sign(p[0] * h[0] + p[1] * h[1] + p[2] * h[2] + p[3] * h[3]);
+  const int s = geometry::dot4_sign(p, h);
   if (s != 2) return s * vertex.orientation;
   return geometry::exact_side(geometry::exact_plane(q), exact_point(v));
 }
@@ -314,7 +312,7 @@ int IntersectionRegistry::side_of_meet(PlaneId a, PlaneId b, PlaneId c, PlaneId 
   const geometry::Homogeneous h = geometry::tpi_homogeneous(planes_[a], planes_[b], planes_[c]);
   const auto& p = planes_[q].approx();
   const int w = geometry::certain_sign(h[3]);
-  const int s = geometry::certain_sign(p[0] * h[0] + p[1] * h[1] + p[2] * h[2] + p[3] * h[3]);
+  const int s = geometry::dot4_sign(p, h);
   if (w != 2 && w != 0 && s != 2) return s * w;
   const std::array<const Plane*, 3> meeting = {&planes_[a], &planes_[b], &planes_[c]};
   if (on_plane_by_inputs(meeting, planes_[q]) || on_pulled_back_plane(meeting, planes_[q])) return 0;
