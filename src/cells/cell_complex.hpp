@@ -164,10 +164,11 @@ class CellComplex {
   /// by their centroids, and the blocks coloured by the parity of their coordinates: two tets in
   /// different blocks of one colour have centroids more than 5 L apart along an axis, while a tet
   /// sharing a node with both would put them within 4.5 L. So the blocks of one colour run at
-  /// once, each inserting its triangles in order into its own tets. A facet on a mesh face is
-  /// covered by the tet on its front side alone (when that side holds material, which then always
-  /// inserts the triangle too), since the two tets may insert the triangle at different times.
-  /// Cost: that of the insertions, over the threads, plus O(pairs of triangle and tet).
+  /// once, each taking its own tets one at a time, with their triangles in order. A facet on a
+  /// mesh face is covered by the tet on its front side alone (when that side holds material, which
+  /// then always inserts the triangle too), since the two tets may insert the triangle at
+  /// different times. Cost: that of the insertions, over the threads, plus O(P log P) for sorting
+  /// the P pairs of triangle and tet.
   void insert_triangles(std::span<const PreparedTriangle> triangles, std::span<const std::vector<Index>> tets,
                         std::vector<Index>* touched);
 
