@@ -383,7 +383,10 @@ void CellComplex::insert_on_edge(EdgeId e, VertexId w) {
 }
 
 FacetId CellComplex::split_facet(FacetId f, PlaneId plane, CellId cell, CellId negative_cell) {
-  const std::vector<Corner> corners = facets_[f].corners;
+  // The corners are moved out (the facet gets its positive part back below), so that neither they
+  // nor the copy of the facet for its negative part cost an allocation.
+  const std::vector<Corner> corners = std::move(facets_[f].corners);
+  facets_[f].corners.clear();
   const std::size_t n = corners.size();
   // A convex polygon crossed by a line meets it in exactly two boundary points, both vertices by
   // now: `rise` is followed by the positive run, `fall` by the negative run.
@@ -451,7 +454,10 @@ FacetId CellComplex::split_facet_in_plane(FacetId f, PlaneId plane) {
 
 CellId CellComplex::split(CellId cell, PlaneId plane, FacetId* section) {
   if (classify(cell, plane) != 0) return -1;
-  const std::vector<FacetId> old_facets = cells_[cell].facets;
+  // Moved out: the cell gets its positive facets back at the end, and nothing reads its list
+  // meanwhile (split_facet adds new parts to the other side's list only).
+  const std::vector<FacetId> old_facets = std::move(cells_[cell].facets);
+  cells_[cell].facets.clear();
 
   // 1. A vertex on every edge of the cell that crosses the plane, in every facet around that edge.
   for (const FacetId f : old_facets) mark_crossings(f, plane);

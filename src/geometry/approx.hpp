@@ -88,7 +88,14 @@ inline int certain_sign(Approx a) {
 /// times; 8 leaves room for the rounding of the bound itself). Tiny results, where underflow could
 /// break that bound, and undecided ones go to the error-tracking evaluation, which also certifies
 /// exact zeros.
-inline int dot4_sign(const std::array<Approx, 4>& a, const std::array<Approx, 4>& b) {
+namespace detail {
+// The error-tracking evaluation, out of line so that dot4_sign's fast path inlines.
+[[gnu::noinline]] inline int dot4_sign_tracked(const std::array<Approx, 4>& a, const std::array<Approx, 4>& b) {
+  return certain_sign(a[0] * b[0] + a[1] * b[1] + a[2] * b[2] + a[3] * b[3]);
+}
+}  // namespace detail
+
+[[gnu::always_inline]] inline int dot4_sign(const std::array<Approx, 4>& a, const std::array<Approx, 4>& b) {
   double value = 0, magnitude = 0, error = 0;
   for (int k = 0; k < 4; ++k) {
     const double product = a[k].value * b[k].value;
@@ -101,7 +108,7 @@ inline int dot4_sign(const std::array<Approx, 4>& a, const std::array<Approx, 4>
   const double bound = (error + 8 * kUnit * magnitude) * kErrorSlack + kTiny;
   if (value > bound) return 1;   // false for NaN, which falls through
   if (-value > bound) return -1;
-  return certain_sign(a[0] * b[0] + a[1] * b[1] + a[2] * b[2] + a[3] * b[3]);
+  return detail::dot4_sign_tracked(a, b);
 }
 
 }  // namespace tetcut::geometry

@@ -4,10 +4,12 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 #include <string>
 #include <utility>
 
-#include <tbb/parallel_sort.h>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 
 #include "geometry/predicates.hpp"
 
@@ -33,12 +35,27 @@ void check_finite(const Points& points, const std::string& source, const char* w
   }
 }
 
-// Sorts each key's entries and assigns ids to unique keys. `keys` holds (key, owner slot) pairs;
-// returns, for each owner slot, the id of its key, and fills `unique` with the distinct keys.
-// The pairs are distinct (slots are), so the parallel sort's order is the one total order.
+// Sorts each key's entries and assigns ids to unique keys. `keys` holds (key, owner slot) pairs
+// whose keys are ascending node ids; returns, for each owner slot, the id of its key, and fills
+// `unique` with the distinct keys in ascending order. A counting sort by the first node, then a
+// sort of each node's few entries (in parallel): O(n) for meshes whose nodes have bounded degree,
+// where one comparison sort of all entries was the largest cost of building a big mesh.
 template <typename Key>
-std::vector<Index> number_keys(std::vector<std::pair<Key, Index>>& keys, std::vector<Key>& unique) {
-  tbb::parallel_sort(keys.begin(), keys.end());
+std::vector<Index> number_keys(std::vector<std::pair<Key, Index>>& keys, std::vector<Key>& unique, Index num_nodes) {
+  std::vector<std::size_t> begin(static_cast<std::size_t>(num_nodes) + 1, 0);
+  for (const auto& entry : keys) ++begin[static_cast<std::size_t>(entry.first[0]) + 1];
+  for (std::size_t n = 1; n < begin.size(); ++n) begin[n] += begin[n - 1];
+  std::vector<std::pair<Key, Index>> sorted(keys.size());
+  {
+    std::vector<std::size_t> fill(begin.begin(), begin.end() - 1);
+    for (const auto& entry : keys) sorted[fill[static_cast<std::size_t>(entry.first[0])]++] = entry;
+  }
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, static_cast<std::size_t>(num_nodes), 4096), [&](const auto& range) {
+    for (std::size_t n = range.begin(); n != range.end(); ++n) {
+      std::sort(sorted.begin() + static_cast<std::ptrdiff_t>(begin[n]), sorted.begin() + static_cast<std::ptrdiff_t>(begin[n + 1]));
+    }
+  });
+  keys = std::move(sorted);
   std::vector<Index> id_of_slot(keys.size());
   unique.clear();
   for (std::size_t i = 0; i < keys.size(); ++i) {
@@ -55,7 +72,9 @@ double signed_volume(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d)
 }
 
 TetAdjacency build_adjacency(const Tets& tets, Index num_nodes) {
-  (void)num_nodes;
+  if (tets.size() > 0 && (tets.minCoeff() < 0 || tets.maxCoeff() >= num_nodes)) {
+    throw std::invalid_argument("build_adjacency: a node id outside [0, num_nodes)");
+  }
   const Index num_tets = static_cast<Index>(tets.rows());
   TetAdjacency adj;
 
@@ -71,7 +90,7 @@ TetAdjacency build_adjacency(const Tets& tets, Index num_nodes) {
     }
   }
   std::vector<FaceKey> unique_faces;
-  const std::vector<Index> face_of_slot = number_keys(face_keys, unique_faces);
+  const std::vector<Index> face_of_slot = number_keys(face_keys, unique_faces, num_nodes);
   adj.faces.resize(static_cast<Eigen::Index>(unique_faces.size()), 3);
   for (std::size_t i = 0; i < unique_faces.size(); ++i) {
     for (int k = 0; k < 3; ++k) adj.faces(static_cast<Eigen::Index>(i), k) = unique_faces[i][k];
@@ -104,7 +123,7 @@ TetAdjacency build_adjacency(const Tets& tets, Index num_nodes) {
     }
   }
   std::vector<EdgeKey> unique_edges;
-  const std::vector<Index> edge_of_slot = number_keys(edge_keys, unique_edges);
+  const std::vector<Index> edge_of_slot = number_keys(edge_keys, unique_edges, num_nodes);
   adj.edges.resize(static_cast<Eigen::Index>(unique_edges.size()), 2);
   for (std::size_t i = 0; i < unique_edges.size(); ++i) {
     adj.edges(static_cast<Eigen::Index>(i), 0) = unique_edges[i][0];
