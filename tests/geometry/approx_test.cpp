@@ -6,6 +6,7 @@
 
 #include <gmpxx.h>
 
+#include <array>
 #include <cmath>
 #include <random>
 
@@ -68,6 +69,65 @@ TEST_P(ApproxTest, BoundContainsTheExactDeterminant) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Scales, ApproxTest, ::testing::Values(1.0, 1e-200, 1e200, std::ldexp(1.0, -500), 0x1p-1000));
+
+// dot4_sign (plain products with a propagated bound first, the tracking filter when undecided):
+// operands that carry errors of their own (products of inputs), against the sign of the exact
+// dot product of the exact operands; nearly cancelling sums, exact zeros from grid values, and
+// scales down to where the products underflow.
+TEST_P(ApproxTest, Dot4SignIsTheExactSign) {
+  const double scale = GetParam();
+  // Products of four factors at this scale neither overflow nor underflow; grid values times a
+  // power of two are exact.
+  const bool in_range = std::abs(std::ilogb(scale)) <= 500;
+  const bool exact_grid = in_range && scale == std::ldexp(1.0, std::ilogb(scale));
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> coordinate(-1, 1);
+  int decided = 0;  // of the trials that do not cancel
+  for (int trial = 0; trial < 3000; ++trial) {
+    std::array<Approx, 4> a, b;
+    mpq_class exact = 0;
+    for (int k = 0; k < 4; ++k) {
+      const double x = coordinate(rng) * scale, y = coordinate(rng), z = coordinate(rng) * scale, w = coordinate(rng);
+      a[k] = Approx::exact(x) * Approx::exact(y);
+      b[k] = Approx::exact(z) * Approx::exact(w);
+      exact += mpq_class(x) * mpq_class(y) * mpq_class(z) * mpq_class(w);
+    }
+    if (trial % 3 == 1) {
+      // Nearly cancelling: b[3] chosen in floating point to make the sum vanish, leaving only
+      // rounding residue.
+      const double x = a[3].value, rest = a[0].value * b[0].value + a[1].value * b[1].value + a[2].value * b[2].value;
+      if (!std::isfinite(-rest / x) || x == 0) continue;  // overflowed or underflowed at this scale
+      b[3] = Approx::exact(-rest / x);
+      exact = mpq_class(b[3].value) * mpq_class(a[3].value);  // a[3] taken as exact too
+      a[3] = Approx::exact(x);
+      for (int k = 0; k < 3; ++k) {
+        a[k] = Approx::exact(a[k].value);
+        b[k] = Approx::exact(b[k].value);
+        exact += mpq_class(a[k].value) * mpq_class(b[k].value);
+      }
+    }
+    if (trial % 3 == 2) {
+      // Exactly zero on grid values: (p, q, -p, -q) . (r, s, r, s).
+      const double p = std::ldexp(std::round(coordinate(rng) * 64), -6) * scale;
+      const double q = std::ldexp(std::round(coordinate(rng) * 64), -6) * scale;
+      const double r = std::ldexp(std::round(coordinate(rng) * 64), -6), t = std::ldexp(std::round(coordinate(rng) * 64), -6);
+      a = {Approx::exact(p), Approx::exact(q), Approx::exact(-p), Approx::exact(-q)};
+      b = {Approx::exact(r), Approx::exact(t), Approx::exact(r), Approx::exact(t)};
+      exact = 0;
+    }
+    const int s = dot4_sign(a, b);
+    if (s != 2) {
+      ASSERT_EQ(s, sgn(exact)) << "trial " << trial;
+      if (trial % 3 != 1) ++decided;
+    }
+    if (trial % 3 == 2 && exact_grid) {
+      EXPECT_EQ(s, 0) << "trial " << trial;  // no rounding: certain zero
+    }
+  }
+  if (in_range) {
+    EXPECT_EQ(decided, 2000);  // everything but the cancelling sums is decided
+  }
+}
 
 TEST(Approx, ExactOperationsCertifyZero) {
   // (0.5 * 3 - 1.25) * 4 - 1 = 0, every step exact.
