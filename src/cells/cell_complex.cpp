@@ -820,31 +820,55 @@ double CellComplex::cell_volume6(CellId cell, const Vec3& origin) const {
     }
   }
   if (std::abs(sum) > bound) return sum;
-  mpq_class exact = 0;
-  const std::array<mpq_class, 3> o = {mpq_class(origin[0]), mpq_class(origin[1]), mpq_class(origin[2])};
-  const auto relative = [&](VertexId v) {
-    std::array<mpq_class, 3> p = registry_->exact_position(v);
-    for (int k = 0; k < 3; ++k) p[k] -= o[k];
-    return p;
+  return exact_cell_volume6(cell);
+}
+
+double CellComplex::exact_cell_volume6(CellId cell) const {
+  // With exact points the fan volumes add up to the cell's volume from any origin, so take the
+  // coordinate origin: the fan triangle (a, b, c) gives det(Xa, Xb, Xc) / (Wa Wb Wc) over the
+  // points' exact homogeneous coordinates. Summing those fractions as rationals costs a gcd per
+  // operation; instead each is divided out in 2048-bit floating point (relative error below
+  // 2^-2000 per term and per addition), which settles the sign unless the sum is within
+  // 2^-1900 of the terms' magnitudes, and only then are the rationals summed.
+  std::vector<std::pair<VertexId, geometry::ExactPoint>> points;
+  const auto exact = [&](VertexId v) -> const geometry::ExactPoint& {
+    for (const auto& [id, point] : points) {
+      if (id == v) return point;
+    }
+    points.emplace_back(v, registry_->exact_homogeneous(v));
+    return points.back().second;
   };
+  struct Term {
+    mpz_class numerator, denominator;
+  };
+  std::vector<Term> terms;
   for (const FacetId f : cells_[cell].facets) {
     const Facet& facet = facets_[f];
     const auto& corners = facet.corners;
-    const auto a = relative(corners[0].vertex);
-    auto b = relative(corners[1].vertex);
     for (std::size_t i = 1; i + 1 < corners.size(); ++i) {
-      const auto c = relative(corners[i + 1].vertex);
-      const mpq_class term = a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0]) +
-                             a[2] * (b[0] * c[1] - b[1] * c[0]);
-      if (facet.back == cell) {
-        exact += term;
-      } else {
-        exact -= term;
-      }
-      b = c;
+      // Copies: `points` may grow (and move) while the three are looked up.
+      const geometry::ExactPoint a = exact(corners[0].vertex), b = exact(corners[i].vertex), c = exact(corners[i + 1].vertex);
+      Term t;
+      t.numerator = a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0]) + a[2] * (b[0] * c[1] - b[1] * c[0]);
+      if (facet.back != cell) t.numerator = -t.numerator;  // stored order is outward for the back cell
+      t.denominator = a[3] * b[3] * c[3];
+      terms.push_back(std::move(t));
     }
   }
-  return exact.get_d();
+  constexpr mp_bitcnt_t kBits = 2048;
+  mpf_class sum(0, kBits), magnitude(0, kBits);
+  for (const Term& t : terms) {
+    mpf_class term(t.numerator, kBits);
+    term /= mpf_class(t.denominator, kBits);
+    sum += term;
+    magnitude += abs(term);
+  }
+  mpf_class margin(magnitude, kBits);
+  mpf_div_2exp(margin.get_mpf_t(), margin.get_mpf_t(), 1900);
+  if (abs(sum) > margin) return sum.get_d();
+  mpq_class rational = 0;
+  for (const Term& t : terms) rational += mpq_class(t.numerator, t.denominator);  // canonicalised
+  return rational.get_d();
 }
 
 std::string CellComplex::validate() const {

@@ -223,6 +223,9 @@ class CellComplex {
   /// its facets of signed fan volumes. Each facet's fan starts at its first corner, so a facet
   /// shared by two cells adds opposite amounts to them and the cells of a tet add up to the tet.
   double cell_volume6(CellId cell, const Vec3& origin) const;
+  /// The same from exact points: what cell_volume6 falls back to for a cell whose rounded
+  /// volume is within its error bound (a cell far thinner than rounding).
+  double exact_cell_volume6(CellId cell) const;
 
   /// Checks the complex's invariants exactly and returns the first violation, or an empty string:
   /// every facet's corners lie on its plane and each edge on both planes of its line; edges and

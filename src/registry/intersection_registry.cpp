@@ -378,13 +378,12 @@ Vec3 IntersectionRegistry::compute_position(const Vertex& vertex) const {
                                                      geometry::exact_plane(planes_[vertex.planes[2]])));
 }
 
-std::array<mpq_class, 3> IntersectionRegistry::exact_position(VertexId v) const {
+geometry::ExactPoint IntersectionRegistry::exact_homogeneous(VertexId v) const {
   // Computed afresh, without the caches, so that parallel measurements may call it.
   const Vertex& vertex = vertices_[v];
-  if (vertex.node >= 0) return geometry::exact_coordinates(geometry::exact_point(rest_->row(vertex.node).transpose()));
-  return geometry::exact_coordinates(geometry::exact_tpi(geometry::exact_plane(planes_[vertex.planes[0]]),
-                                                         geometry::exact_plane(planes_[vertex.planes[1]]),
-                                                         geometry::exact_plane(planes_[vertex.planes[2]])));
+  if (vertex.node >= 0) return geometry::exact_point(rest_->row(vertex.node).transpose());
+  return geometry::exact_tpi(geometry::exact_plane(planes_[vertex.planes[0]]), geometry::exact_plane(planes_[vertex.planes[1]]),
+                             geometry::exact_plane(planes_[vertex.planes[2]]));
 }
 
 double IntersectionRegistry::position_tolerance() { return geometry::kCoordinateTolerance; }

@@ -94,9 +94,9 @@ class IntersectionRegistry {
   /// Coordinates of v, correctly rounded or nearly (geometry::tpi_coordinates). For output and
   /// for sound filters widened by position_tolerance(), never for decisions.
   const Vec3& position(VertexId v) const { return vertices_[v].position; }
-  /// Exact rational coordinates of v (slow: for measurements rounding cannot settle). Uses no
-  /// cache, so it is safe to call concurrently.
-  std::array<mpq_class, 3> exact_position(VertexId v) const;
+  /// Exact homogeneous coordinates of v, X / W (slow: for measurements rounding cannot settle).
+  /// Uses no cache, so it is safe to call concurrently.
+  geometry::ExactPoint exact_homogeneous(VertexId v) const;
   /// Bound on the error of each rounded coordinate of position(), relative to the position's
   /// largest coordinate (see geometry::tpi_coordinates).
   static double position_tolerance();

@@ -296,6 +296,26 @@ TEST(CellComplex, Figure2FiftyRandomTriangles) {
   EXPECT_GT(volumes.size(), 1000u);
 }
 
+// A slab one ulp thick: its rounded volume is far below the rounding of its corners, so the
+// volume comes from exact points, and must be the slab's (thickness times the section's area).
+TEST(CellComplex, CellThinnerThanRoundingHasItsExactVolume) {
+  const double z = 0.5, thickness = std::nextafter(z, 1.0) - z;
+  Complex c(one_tet());
+  c.insert({covering(2, z), covering(2, z + thickness)});
+  std::vector<double> volumes;
+  for (CellId cell = c.complex.first_cell(0); cell >= 0; cell = c.complex.cells()[cell].next_in_tet) {
+    const double rounded = c.complex.cell_volume6(cell, Vec3::Zero()) / 6;
+    const double exact = c.complex.exact_cell_volume6(cell) / 6;
+    EXPECT_NEAR(rounded, exact, 1e-15) << "cell " << cell;
+    volumes.push_back(exact);
+  }
+  ASSERT_EQ(volumes.size(), 3u);
+  std::sort(volumes.begin(), volumes.end());
+  // The section at height z of the corner tet is a right triangle with legs 1 - z.
+  EXPECT_NEAR(volumes[0], thickness * (1 - z) * (1 - z) / 2, 1e-6 * thickness);
+  EXPECT_NEAR(volumes[0] + volumes[1] + volumes[2], kTetVolume, 1e-15);
+}
+
 // ---- Parallel insertion ------------------------------------------------------------------------
 
 // A bar of 40 x 2 x 2 five-tet cubes, long enough for several blocks of one colour to run at once.
