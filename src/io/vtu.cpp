@@ -55,6 +55,15 @@ class VtuReader {
     throw Error(ErrorKind::kInvalidInput, message, source_, line);
   }
   std::ptrdiff_t offset_of(const pugi::xml_node& node) const { return node.offset_debug(); }
+  // Fails unless `id`, used by `what` (a cell or polygon named with its 1-based number), numbers
+  // one of the piece's points.
+  void check_point_id(const char* what, std::int64_t element, std::int64_t id, std::int64_t num_points,
+                      const pugi::xml_node& connectivity) const {
+    if (id >= 0 && id < num_points) return;
+    fail(std::string(what) + " " + std::to_string(element + 1) + " refers to point " + std::to_string(id) +
+             ", but the piece has " + std::to_string(num_points) + " points (numbered from 0)",
+         offset_of(connectivity));
+  }
 
   const ScalarInfo& scalar_of(const pugi::xml_node& array) const {
     const std::string type = array.attribute("type").as_string();
@@ -281,11 +290,7 @@ TetMeshData VtuReader::read() {
                                    offset_of(connectivity));
         for (std::int64_t k = start; k < end; ++k) {
           const std::int64_t id = conn[static_cast<std::size_t>(k)];
-          if (id < 0 || id >= num_points) {
-            fail("cell " + std::to_string(c + 1) + " refers to point " + std::to_string(id) + ", but the piece has " +
-                     std::to_string(num_points) + " points (numbered from 0)",
-                 offset_of(connectivity));
-          }
+          check_point_id("cell", c, id, num_points, connectivity);
           ids.push_back(base + static_cast<Index>(id));
         }
       }
@@ -327,12 +332,7 @@ TriangleSurface VtuReader::read_polydata() {
         fail("polygon " + std::to_string(c + 1) + " has fewer than 3 points or an offset out of range", offset_of(offsets));
       }
       for (std::int64_t k = start; k < end; ++k) {
-        const std::int64_t id = conn[static_cast<std::size_t>(k)];
-        if (id < 0 || id >= num_points) {
-          fail("polygon " + std::to_string(c + 1) + " refers to point " + std::to_string(id) + ", but the piece has " +
-                   std::to_string(num_points) + " points (numbered from 0)",
-               offset_of(connectivity));
-        }
+        check_point_id("polygon", c, conn[static_cast<std::size_t>(k)], num_points, connectivity);
       }
       // A fan around the first corner.
       for (std::int64_t k = start + 1; k + 1 < end; ++k) {
