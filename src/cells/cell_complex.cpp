@@ -830,13 +830,19 @@ double CellComplex::exact_cell_volume6(CellId cell) const {
   // operation; instead each is divided out in 2048-bit floating point (relative error below
   // 2^-2000 per term and per addition), which settles the sign unless the sum is within
   // 2^-1900 of the terms' magnitudes, and only then are the rationals summed.
-  std::vector<std::pair<VertexId, geometry::ExactPoint>> points;
+
+  // The cell's distinct points, each converted once (no growth afterwards, so references hold).
+  std::vector<VertexId> ids;
+  for (const FacetId f : cells_[cell].facets) {
+    for (const Corner& corner : facets_[f].corners) ids.push_back(corner.vertex);
+  }
+  std::sort(ids.begin(), ids.end());
+  ids.erase(std::unique(ids.begin(), ids.end()), ids.end());
+  std::vector<geometry::ExactPoint> points;
+  points.reserve(ids.size());
+  for (const VertexId v : ids) points.push_back(registry_->exact_homogeneous(v));
   const auto exact = [&](VertexId v) -> const geometry::ExactPoint& {
-    for (const auto& [id, point] : points) {
-      if (id == v) return point;
-    }
-    points.emplace_back(v, registry_->exact_homogeneous(v));
-    return points.back().second;
+    return points[static_cast<std::size_t>(std::lower_bound(ids.begin(), ids.end(), v) - ids.begin())];
   };
   struct Term {
     mpz_class numerator, denominator;
@@ -846,8 +852,9 @@ double CellComplex::exact_cell_volume6(CellId cell) const {
     const Facet& facet = facets_[f];
     const auto& corners = facet.corners;
     for (std::size_t i = 1; i + 1 < corners.size(); ++i) {
-      // Copies: `points` may grow (and move) while the three are looked up.
-      const geometry::ExactPoint a = exact(corners[0].vertex), b = exact(corners[i].vertex), c = exact(corners[i + 1].vertex);
+      const geometry::ExactPoint& a = exact(corners[0].vertex);
+      const geometry::ExactPoint& b = exact(corners[i].vertex);
+      const geometry::ExactPoint& c = exact(corners[i + 1].vertex);
       Term t;
       t.numerator = a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0]) + a[2] * (b[0] * c[1] - b[1] * c[0]);
       if (facet.back != cell) t.numerator = -t.numerator;  // stored order is outward for the back cell

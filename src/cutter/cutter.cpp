@@ -63,7 +63,6 @@ void Cutter::State::insert_rest(const TriangleSurface& batch, CutBatchReport* re
   check_batch(batch);
   report->triangles = batch.num_triangles();
   std::vector<cells::PreparedTriangle> prepared;
-  std::vector<std::array<Vec3, 3>> corners;
   for (Index i = 0; i < batch.num_triangles(); ++i) {
     const std::array<Vec3, 3> x = corners_of(batch, i);
     const std::int32_t id = next_id(batch.num_triangles() - i);
@@ -83,7 +82,6 @@ void Cutter::State::insert_rest(const TriangleSurface& batch, CutBatchReport* re
       t.walls[e] = registry.wall(x[e], x[(e + 1) % 3], axis, x[(e + 2) % 3]);
     }
     prepared.push_back(t);
-    corners.push_back(x);
   }
   // Large batches (an embedded surface) go to the parallel insertion; a progressive cut's few
   // triangles would not repay waking the threads.
@@ -92,14 +90,14 @@ void Cutter::State::insert_rest(const TriangleSurface& batch, CutBatchReport* re
     std::vector<Index> candidates;
     for (std::size_t i = 0; i < prepared.size(); ++i) {
       candidates.clear();
-      rest_tets.query(box_of(corners[i]), &candidates);
+      rest_tets.query(box_of(prepared[i].corners), &candidates);
       complex.insert_triangle(prepared[i], candidates, -1, touched);
     }
     return;
   }
   std::vector<std::vector<Index>> candidates(prepared.size());
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, prepared.size(), 1024), [&](const auto& range) {
-    for (std::size_t i = range.begin(); i != range.end(); ++i) rest_tets.query(box_of(corners[i]), &candidates[i]);
+    for (std::size_t i = range.begin(); i != range.end(); ++i) rest_tets.query(box_of(prepared[i].corners), &candidates[i]);
   });
   complex.insert_triangles(prepared, candidates, touched);
 }
