@@ -13,6 +13,7 @@
 #include <tetcut/cutter.hpp>
 #include <tetcut/tet_mesh.hpp>
 
+#include <memory>
 #include <span>
 #include <vector>
 
@@ -59,11 +60,12 @@ struct Material {
 inline constexpr double kMinVolumeFraction = 0.01;
 
 enum class LinearSolver {
-  /// Conjugate gradients with an incomplete Cholesky preconditioner, to a relative residual of
-  /// 1e-10: the default (25 times faster than the direct solve at 20k tets here).
+  /// Conjugate gradients preconditioned by the inverses of the 3 x 3 diagonal blocks, solved as
+  /// accurately as the Newton tolerance needs (see StepOptions): the default. Cheap to set up
+  /// after a cut and O(nonzeros) per iteration on both cores.
   kConjugateGradient,
   /// Sparse LDL^T (Eigen's simplicial factorisation): exact, but its fill makes it slow beyond a
-  /// few thousand tets.
+  /// few thousand tets; for small or badly conditioned static problems.
   kCholesky,
 };
 
@@ -71,17 +73,42 @@ struct StepOptions {
   double dt = 1.0 / 120;
   Vec3 gravity = Vec3(0, 0, -9.81);
   int max_newton_iterations = 30;
-  /// Newton stops when half the Newton decrement, -g.d / 2 (the energy the step expects to gain),
-  /// falls below tolerance^2 times the kinetic energy scale M (L / dt)^2, L the mesh's size: a
-  /// step whose positions are settled to about tolerance * L.
+  /// Newton stops when half the Newton decrement (the energy the step still expects to gain) is
+  /// below tolerance^2 times the kinetic energy scale M (L / dt)^2, L the mesh's size: a step
+  /// whose positions are settled to about tolerance * L. For a dynamic step the test is also
+  /// passed, with no further solve, when an upper bound of the decrement from the gradient
+  /// (dt^2 g^T M^-1 g, as the Hessian is at least M / dt^2) is below it.
   double tolerance = 1e-7;
   LinearSolver solver = LinearSolver::kConjugateGradient;
+  /// Conjugate gradient iterations per Newton iteration at most; 0: as many as it takes to solve
+  /// the Newton system to the accuracy the tolerance asks for.
+  int max_cg_iterations = 0;
+
+  /// The real-time mode: a fixed budget of work per step (one Newton iteration of at most
+  /// `cg_iterations` conjugate gradient iterations by default), whatever the residual; the
+  /// report's `residual` says what the budget left. See the README for what it costs in accuracy.
+  static StepOptions real_time(double dt, int newton_iterations = 1, int cg_iterations = 30) {
+    StepOptions o;
+    o.dt = dt;
+    o.max_newton_iterations = newton_iterations;
+    o.max_cg_iterations = cg_iterations;
+    return o;
+  }
 };
 
 struct StepReport {
-  int newton_iterations = 0;
+  int newton_iterations = 0;  ///< Newton systems assembled and solved
+  int cg_iterations = 0;      ///< conjugate gradient iterations, over all Newton iterations
   bool converged = false;
   double energy = 0;  ///< the incremental potential at the end of the step
+  /// How far from converged the step ended, in the units of StepOptions::tolerance (converged
+  /// when it is at most the tolerance): sqrt(bound / (M (L / dt)^2)) for the bound of half the
+  /// Newton decrement at the end positions (dynamic steps), or the last half decrement measured
+  /// (static solves).
+  double residual = 0;
+  /// Wall time of the step's stages in seconds: element energies, stresses and Hessians with
+  /// their assembly; the linear solves; the line search (energies and gradients of trial points).
+  double assemble_seconds = 0, solve_seconds = 0, line_search_seconds = 0;
 };
 
 /// A point that moves with one tet: sum of weights[k] times node k of tet `tet` (weights sum to 1),
@@ -112,12 +139,23 @@ struct Obstacle {
 std::vector<std::pair<EmbeddedPoint, EmbeddedPoint>> incision_pairs(const MaterialSurface& surface, std::int64_t first_cut,
                                                                     std::int64_t end_cut);
 
+struct SimulatorState;
+
+/// Backward Euler on a (cut) tet mesh. Cost per Newton iteration: O(tets) element work (analytic
+/// eigensystems, no numerical eigen-decomposition) and O(nonzeros) per conjugate gradient
+/// iteration, both on all cores; results do not depend on the number of threads. After a cut,
+/// `remesh` is O(tets) and needs no factorisation.
 class Simulator {
  public:
   /// The mesh's rest positions define the material; its current positions are the start state
   /// (velocities zero). `volume_fraction` per tet (empty: all 1) scales mass and energy, floored
   /// at kMinVolumeFraction. Error(kInvalidArgument) on a bad material or fraction count.
   Simulator(const TetMesh& mesh, const Material& material, std::span<const double> volume_fraction = {});
+  Simulator(const Simulator& other);
+  Simulator& operator=(const Simulator& other);
+  Simulator(Simulator&&) noexcept;
+  Simulator& operator=(Simulator&&) noexcept;
+  ~Simulator();
 
   /// After a cut: the new mesh (same material) whose nodes from `first_new_node` on were split
   /// from `new_node_source` (CutBatchReport). Old nodes keep their state; new ones start with
@@ -127,13 +165,14 @@ class Simulator {
   void remesh(const TetMesh& mesh, std::span<const double> volume_fraction, Index first_new_node,
               std::span<const Index> new_node_source);
 
-  Index num_nodes() const { return static_cast<Index>(x_.rows()); }
-  const Points& positions() const { return x_; }
-  const Points& velocities() const { return v_; }
+  Index num_nodes() const;
+  Index num_tets() const;
+  const Points& positions() const;
+  const Points& velocities() const;
   void set_positions(const Points& x);
   void set_velocities(const Points& v);
   /// Per node lumped mass.
-  const Eigen::VectorXd& masses() const { return mass_; }
+  const Eigen::VectorXd& masses() const;
 
   /// Holds a node where it is.
   void pin(Index node);
@@ -151,19 +190,17 @@ class Simulator {
 
   /// Contact: each point is pushed out of every obstacle by a penalty (stiffness / 2) d^2 on its
   /// penetration depth d, a soft constraint that the implicit step treats like any other energy.
-  void set_contact_points(std::vector<EmbeddedPoint> points) { contact_points_ = std::move(points); }
-  void add_obstacle(const Obstacle& obstacle) { obstacles_.push_back(obstacle); }
+  /// Error(kInvalidArgument) when a point names a tet that does not exist.
+  void set_contact_points(std::vector<EmbeddedPoint> points);
+  void add_obstacle(const Obstacle& obstacle);
   /// N/m; by default 10 E h, with h the mean edge length of the rest mesh.
-  void set_contact_stiffness(double stiffness) {
-    contact_stiffness_ = stiffness;
-    contact_stiffness_given_ = true;
-  }
-  double contact_stiffness() const { return contact_stiffness_; }
+  void set_contact_stiffness(double stiffness);
+  double contact_stiffness() const;
   /// A zero-rest-length spring (stiffness / 2) |p - q|^2 between two points, e.g. across an
   /// incision to close it.
   void add_spring(const EmbeddedPoint& p, const EmbeddedPoint& q, double stiffness);
-  void clear_springs() { springs_.clear(); }
-  Index num_springs() const { return static_cast<Index>(springs_.size()); }
+  void clear_springs();
+  Index num_springs() const;
   /// Where an embedded point is now.
   Vec3 position(const EmbeddedPoint& p) const;
 
@@ -175,38 +212,8 @@ class Simulator {
   Vec3 momentum() const;
 
  private:
-  struct Element {
-    std::array<Index, 4> nodes;
-    Eigen::Matrix<double, 4, 3> weights;  // dF/dx: F = sum_a x_a w_a^T
-    double volume;                        // rest volume times the material fraction
-  };
   StepReport minimise(const StepOptions& options, bool inertia);
-  void build(const TetMesh& mesh, std::span<const double> volume_fraction);
-  Mat3 deformation_gradient(const Element& e, const Points& x) const;
-
-  struct Spring {
-    EmbeddedPoint p, q;
-    double stiffness;
-  };
-  // The soft constraints as energies of one point y = sum_i c_i x_{n_i} (up to 8 nodes); calls
-  // visit(nodes, coefficients, count, energy, dE/dy, d2E/dy2) for each active one at positions x.
-  template <typename Visit>
-  void for_each_constraint(const Points& x, Visit&& visit) const;
-
-  Material material_;
-  std::vector<EmbeddedPoint> contact_points_;
-  std::vector<Obstacle> obstacles_;
-  double contact_stiffness_ = 0;
-  bool contact_stiffness_given_ = false;
-  std::vector<Spring> springs_;
-  Lame parameters_;
-  std::vector<Element> elements_;
-  Points x_, v_;
-  Eigen::VectorXd mass_;
-  double size_ = 1;
-  // Per node: -1 free, 0 pinned, 1 moved to target_.
-  std::vector<std::int8_t> constraint_;
-  Points target_;
+  std::unique_ptr<SimulatorState> state_;
 };
 
 }  // namespace tetcut::sim

@@ -1,0 +1,248 @@
+#include "sim/block_sparse.hpp"
+
+#include <tbb/enumerable_thread_specific.h>
+
+#include <cmath>
+#include <limits>
+
+namespace tetcut::sim::detail {
+namespace {
+
+// Incidence of nodes in groups (tets or spring pairs) as compressed rows: the groups around node n
+// are group[start[n] .. start[n + 1]).
+template <std::size_t N>
+void incidence(Index num_nodes, std::span<const std::array<Index, N>> groups, std::vector<Index>* start, std::vector<Index>* group) {
+  start->assign(static_cast<std::size_t>(num_nodes) + 1, 0);
+  for (const auto& g : groups) {
+    for (const Index n : g) ++(*start)[n + 1];
+  }
+  for (Index n = 0; n < num_nodes; ++n) (*start)[n + 1] += (*start)[n];
+  group->resize(static_cast<std::size_t>(start->back()));
+  std::vector<Index> next(start->begin(), start->end() - 1);
+  for (Index i = 0; i < static_cast<Index>(groups.size()); ++i) {
+    for (const Index n : groups[i]) (*group)[next[n]++] = i;
+  }
+}
+
+// Per-thread scratch of the pattern build: a stamp per node (which row last saw it) and its
+// position in that row.
+struct RowScratch {
+  std::vector<Index> stamp, position;
+  std::vector<Index> row;
+};
+
+}  // namespace
+
+void BlockSparseMatrix::build(Index num_nodes, std::span<const std::array<Index, 4>> tets, std::span<const std::array<Index, 8>> extra,
+                              std::vector<std::array<Index, 16>>* tet_slots) {
+  std::vector<Index> tet_start, tet_of, extra_start, extra_of;
+  incidence<4>(num_nodes, tets, &tet_start, &tet_of);
+  incidence<8>(num_nodes, extra, &extra_start, &extra_of);
+  tbb::enumerable_thread_specific<RowScratch> scratch([&] {
+    RowScratch s;
+    s.stamp.assign(static_cast<std::size_t>(num_nodes), -1);
+    s.position.assign(static_cast<std::size_t>(num_nodes), -1);
+    return s;
+  });
+  // The columns of row r, sorted, into s.row; marks them with `mark` (distinct per pass and row).
+  const auto collect = [&](Index r, Index mark, RowScratch& s) {
+    s.row.clear();
+    const auto add = [&](Index n) {
+      if (s.stamp[n] == mark) return;
+      s.stamp[n] = mark;
+      s.row.push_back(n);
+    };
+    add(r);
+    for (Index i = tet_start[r]; i < tet_start[r + 1]; ++i) {
+      for (const Index n : tets[tet_of[i]]) add(n);
+    }
+    for (Index i = extra_start[r]; i < extra_start[r + 1]; ++i) {
+      for (const Index n : extra[extra_of[i]]) add(n);
+    }
+  };
+  row_start_.assign(static_cast<std::size_t>(num_nodes) + 1, 0);
+  for_chunks(num_nodes, kNodeChunk, [&](Index begin, Index end, Index) {
+    RowScratch& s = scratch.local();
+    for (Index r = begin; r < end; ++r) {
+      collect(r, r, s);
+      row_start_[r + 1] = static_cast<Index>(s.row.size());
+    }
+  });
+  for (Index r = 0; r < num_nodes; ++r) row_start_[r + 1] += row_start_[r];
+  columns_.resize(static_cast<std::size_t>(row_start_.back()));
+  diagonal_.resize(static_cast<std::size_t>(num_nodes));
+  tet_slots->resize(tets.size());
+  for_chunks(num_nodes, kNodeChunk, [&](Index begin, Index end, Index) {
+    RowScratch& s = scratch.local();
+    for (Index r = begin; r < end; ++r) {
+      collect(r, r + num_nodes, s);
+      std::sort(s.row.begin(), s.row.end());
+      const Index first = row_start_[r];
+      for (Index k = 0; k < static_cast<Index>(s.row.size()); ++k) {
+        columns_[first + k] = s.row[k];
+        s.position[s.row[k]] = first + k;
+      }
+      diagonal_[r] = s.position[r];
+      for (Index i = tet_start[r]; i < tet_start[r + 1]; ++i) {
+        const Index t = tet_of[i];
+        const auto& nodes = tets[t];
+        const int a = static_cast<int>(std::find(nodes.begin(), nodes.end(), r) - nodes.begin());
+        for (int b = 0; b < 4; ++b) (*tet_slots)[t][4 * a + b] = s.position[nodes[b]];
+      }
+    }
+  });
+  values_.assign(9 * columns_.size(), 0.0);
+}
+
+Index BlockSparseMatrix::slot(Index row, Index column) const {
+  const auto begin = columns_.begin() + row_start_[row], end = columns_.begin() + row_start_[row + 1];
+  const auto found = std::lower_bound(begin, end, column);
+  return found != end && *found == column ? static_cast<Index>(found - columns_.begin()) : -1;
+}
+
+void BlockSparseMatrix::set_zero() { std::fill(values_.begin(), values_.end(), 0.0); }
+
+double BlockSparseMatrix::multiply_rows(Index begin, Index end, const double* x, double* y, const std::uint8_t* free,
+                                        const double* values) const {
+  const double* v = values ? values : values_.data();
+  double dot = 0;
+  for (Index r = begin; r < end; ++r) {
+    double* out = y + 3 * static_cast<std::size_t>(r);
+    if (!free[r]) {
+      out[0] = out[1] = out[2] = 0;
+      continue;
+    }
+    double y0 = 0, y1 = 0, y2 = 0;
+    for (Index k = row_start_[r]; k < row_start_[r + 1]; ++k) {
+      const double* b = v + 9 * static_cast<std::size_t>(k);
+      const double* in = x + 3 * static_cast<std::size_t>(columns_[k]);
+      y0 += b[0] * in[0] + b[1] * in[1] + b[2] * in[2];
+      y1 += b[3] * in[0] + b[4] * in[1] + b[5] * in[2];
+      y2 += b[6] * in[0] + b[7] * in[1] + b[8] * in[2];
+    }
+    out[0] = y0;
+    out[1] = y1;
+    out[2] = y2;
+    const double* own = x + 3 * static_cast<std::size_t>(r);
+    dot += own[0] * y0 + own[1] * y1 + own[2] * y2;
+  }
+  return dot;
+}
+
+void BlockSparseMatrix::multiply(const double* x, double* y, const std::uint8_t* free) const {
+  for_chunks(num_rows(), kNodeChunk, [&](Index begin, Index end, Index) { multiply_rows(begin, end, x, y, free); });
+}
+
+namespace {
+
+// The inverse of a symmetric positive definite 3 x 3 block (row-major), or of its diagonal when
+// it is not invertible (a node with no stiffness and no mass, which a valid mesh does not have).
+std::array<double, 9> inverse_block(const double* b) {
+  const double c00 = b[4] * b[8] - b[5] * b[7], c01 = b[5] * b[6] - b[3] * b[8], c02 = b[3] * b[7] - b[4] * b[6];
+  const double det = b[0] * c00 + b[1] * c01 + b[2] * c02;
+  std::array<double, 9> inv{};
+  if (det > 0 && std::isfinite(det)) {
+    const double s = 1 / det;
+    inv = {c00 * s, (b[2] * b[7] - b[1] * b[8]) * s, (b[1] * b[5] - b[2] * b[4]) * s,
+           c01 * s, (b[0] * b[8] - b[2] * b[6]) * s, (b[2] * b[3] - b[0] * b[5]) * s,
+           c02 * s, (b[1] * b[6] - b[0] * b[7]) * s, (b[0] * b[4] - b[1] * b[3]) * s};
+    return inv;
+  }
+  for (int i = 0; i < 3; ++i) inv[4 * i] = b[4 * i] > 0 ? 1 / b[4 * i] : 1.0;
+  return inv;
+}
+
+}  // namespace
+
+ConjugateGradientReport conjugate_gradients(const BlockSparseMatrix& a, std::span<const double> b, std::span<double> d,
+                                            std::span<const std::uint8_t> free, std::span<const double> weight,
+                                            const ConjugateGradientOptions& options, ConjugateGradientWorkspace* w) {
+  const Index n = a.num_rows();
+  const std::size_t size = 3 * static_cast<std::size_t>(n);
+  w->r.resize(size);
+  w->z.resize(size);
+  w->p.resize(size);
+  w->q.resize(size);
+  w->inverse_diagonal.resize(static_cast<std::size_t>(n));
+  const std::uint8_t* is_free = free.data();
+  // Preconditioner, and r = b - A d with the start's residual measures.
+  for_chunks(n, kNodeChunk, [&](Index begin, Index end, Index) {
+    for (Index v = begin; v < end; ++v) w->inverse_diagonal[v] = inverse_block(a.block(a.diagonal_slot(v)));
+  });
+  a.multiply(d.data(), w->q.data(), is_free);
+  struct Sums {
+    double rz = 0, rw = 0;
+  };
+  // Sets d += step p and r -= step q (at the start: r = b - q), z = P r, and returns r.z and
+  // r^T W r; the chunks' sums go into partial[2c], partial[2c + 1] and are added in chunk order.
+  const Index chunks = std::max<Index>(1, (n + kNodeChunk - 1) / kNodeChunk);
+  w->partial.assign(2 * static_cast<std::size_t>(chunks), 0.0);
+  const auto update = [&](bool start, double step) {
+    for_chunks(n, kNodeChunk, [&](Index begin, Index end, Index c) {
+      double rz = 0, rw = 0;
+      for (Index v = begin; v < end; ++v) {
+        double* r = w->r.data() + 3 * static_cast<std::size_t>(v);
+        double* z = w->z.data() + 3 * static_cast<std::size_t>(v);
+        const double* q = w->q.data() + 3 * static_cast<std::size_t>(v);
+        if (!is_free[v]) {
+          r[0] = r[1] = r[2] = z[0] = z[1] = z[2] = 0;
+          continue;
+        }
+        if (start) {
+          for (int k = 0; k < 3; ++k) r[k] = b[3 * v + k] - q[k];
+        } else {
+          const double* p = w->p.data() + 3 * static_cast<std::size_t>(v);
+          for (int k = 0; k < 3; ++k) {
+            d[3 * v + k] += step * p[k];
+            r[k] -= step * q[k];
+          }
+        }
+        const std::array<double, 9>& m = w->inverse_diagonal[v];
+        z[0] = m[0] * r[0] + m[1] * r[1] + m[2] * r[2];
+        z[1] = m[3] * r[0] + m[4] * r[1] + m[5] * r[2];
+        z[2] = m[6] * r[0] + m[7] * r[1] + m[8] * r[2];
+        rz += r[0] * z[0] + r[1] * z[1] + r[2] * z[2];
+        rw += weight[v] * (r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
+      }
+      w->partial[2 * c] = rz;
+      w->partial[2 * c + 1] = rw;
+    });
+    Sums s;
+    for (Index c = 0; c < chunks; ++c) {
+      s.rz += w->partial[2 * c];
+      s.rw += w->partial[2 * c + 1];
+    }
+    return s;
+  };
+  Sums s = update(true, 0);
+  ConjugateGradientReport report;
+  report.weighted_residual = s.rw;
+  const double target = std::max(options.absolute_target, options.relative_target * options.relative_target * s.rw);
+  if (s.rw <= target) {
+    report.reached_target = true;
+    return report;
+  }
+  const int max_iterations = options.max_iterations > 0 ? options.max_iterations : static_cast<int>(std::min<std::size_t>(10 * size + 10, 1 << 30));
+  std::copy(w->z.begin(), w->z.end(), w->p.begin());
+  for (int iteration = 0; iteration < max_iterations; ++iteration) {
+    double pq = 0;
+    for_chunks(n, kNodeChunk, [&](Index begin, Index end, Index c) { w->partial[2 * c] = a.multiply_rows(begin, end, w->p.data(), w->q.data(), is_free); });
+    for (Index c = 0; c < chunks; ++c) pq += w->partial[2 * c];
+    if (!(pq > 0) || !std::isfinite(pq)) break;  // no descent left (rounding) or not positive definite
+    const Sums next = update(false, s.rz / pq);
+    report.iterations = iteration + 1;
+    report.weighted_residual = next.rw;
+    if (next.rw <= target) {
+      report.reached_target = true;
+      break;
+    }
+    const double beta = next.rz / s.rz;
+    s = next;
+    for_chunks(n, kNodeChunk, [&](Index begin, Index end, Index) {
+      for (std::size_t k = 3 * static_cast<std::size_t>(begin); k < 3 * static_cast<std::size_t>(end); ++k) w->p[k] = w->z[k] + beta * w->p[k];
+    });
+  }
+  return report;
+}
+
+}  // namespace tetcut::sim::detail

@@ -1,0 +1,126 @@
+#pragma once
+// The Newton system of the simulator: a symmetric matrix of 3 x 3 blocks over the mesh nodes,
+// stored in block compressed rows with both triangles (each row multiplies on its own, so rows
+// split over threads without races), and conjugate gradients on it.
+//
+// Constrained (pinned or kinematic) nodes stay in the pattern; the solver works on the free ones
+// only: it reads and writes vectors there and treats the others as zero, which is the matrix
+// restricted to the free unknowns. So pinning or releasing a node changes nothing here.
+//
+// Results never depend on the number of threads: a row's product is computed by one thread in
+// column order, and every sum over nodes is taken in fixed chunks added in chunk order.
+
+#include <tetcut/types.hpp>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <array>
+#include <cstdint>
+#include <span>
+#include <vector>
+
+namespace tetcut::sim::detail {
+
+/// Node-range chunks for deterministic parallel loops: chunk c covers nodes [c * kChunk, ...).
+inline constexpr Index kNodeChunk = 512;
+
+/// Calls body(begin, end, chunk) over fixed chunks of [0, count), in parallel when there are
+/// several. The chunking is independent of the number of threads.
+template <typename Body>
+void for_chunks(Index count, Index chunk, const Body& body) {
+  const Index chunks = (count + chunk - 1) / chunk;
+  if (chunks <= 1) {
+    if (count > 0) body(Index{0}, count, Index{0});
+    return;
+  }
+  tbb::parallel_for(
+      tbb::blocked_range<Index>(0, chunks, 1),
+      [&](const tbb::blocked_range<Index>& range) {
+        for (Index c = range.begin(); c != range.end(); ++c) body(c * chunk, std::min(count, (c + 1) * chunk), c);
+      },
+      tbb::simple_partitioner());
+}
+
+/// The sum of f(begin, end) over the fixed chunks of [0, count), added in chunk order (the same
+/// bits on any number of threads). `partial` is scratch.
+template <typename Sum>
+double sum_chunks(Index count, Index chunk, std::vector<double>* partial, const Sum& sum) {
+  const Index chunks = (count + chunk - 1) / chunk;
+  partial->assign(static_cast<std::size_t>(std::max<Index>(chunks, 1)), 0.0);
+  for_chunks(count, chunk, [&](Index begin, Index end, Index c) { (*partial)[c] = sum(begin, end); });
+  double total = 0;
+  for (const double s : *partial) total += s;
+  return total;
+}
+
+class BlockSparseMatrix {
+ public:
+  /// The pattern in which every two nodes of a tet, and every two of the `extra` groups (eight
+  /// nodes, the two tets a spring joins), are coupled; the diagonal is always present. Fills
+  /// `tet_slots` with the 16 slots of each tet: slot of (row node a, column node b) is
+  /// tet_slots[t][4 a + b]. O(sum over nodes of the tets around it), parallel over rows.
+  void build(Index num_nodes, std::span<const std::array<Index, 4>> tets, std::span<const std::array<Index, 8>> extra,
+             std::vector<std::array<Index, 16>>* tet_slots);
+
+  Index num_rows() const { return static_cast<Index>(row_start_.size()) - 1; }
+  Index num_blocks() const { return static_cast<Index>(columns_.size()); }
+  /// The slot of block (row, column), or -1 when it is not in the pattern. O(log row length).
+  Index slot(Index row, Index column) const;
+  Index diagonal_slot(Index row) const { return diagonal_[row]; }
+  /// Row `row`'s slots are row_begin(row) .. row_end(row) - 1, by ascending column.
+  Index row_begin(Index row) const { return row_start_[row]; }
+  Index row_end(Index row) const { return row_start_[row + 1]; }
+  Index column(Index slot) const { return columns_[slot]; }
+  /// Block `slot`, 9 values in row-major order.
+  double* block(Index slot) { return values_.data() + 9 * static_cast<std::size_t>(slot); }
+  const double* block(Index slot) const { return values_.data() + 9 * static_cast<std::size_t>(slot); }
+  void set_zero();
+  /// All blocks' values, 9 per slot.
+  std::vector<double>& values() { return values_; }
+  const std::vector<double>& values() const { return values_; }
+
+  /// y = A x restricted to the nodes with free[n] != 0 (y is 0 at the others, and x is read as 0
+  /// there). x and y hold 3 values per node.
+  void multiply(const double* x, double* y, const std::uint8_t* free) const;
+  /// Same for one chunk of rows, returning sum over those rows of x . (A x) (for CG's step).
+  /// `values` (default: this matrix's) may be another set of values over the same pattern.
+  double multiply_rows(Index begin, Index end, const double* x, double* y, const std::uint8_t* free,
+                       const double* values = nullptr) const;
+
+ private:
+  std::vector<Index> row_start_{0};
+  std::vector<Index> columns_;
+  std::vector<Index> diagonal_;
+  std::vector<double> values_;
+};
+
+struct ConjugateGradientOptions {
+  int max_iterations = 0;  ///< 0: no limit but 10 times the unknowns (a safeguard)
+  /// Stop once r^T W r <= absolute_target or <= relative_target^2 times its starting value, with
+  /// W = diag(weight) per node (the solver's measure of the residual; the simulator passes dt^2 /
+  /// mass, so that it bounds the energy the remaining error is worth).
+  double absolute_target = 0;
+  double relative_target = 0;
+};
+
+struct ConjugateGradientReport {
+  int iterations = 0;
+  double weighted_residual = 0;  ///< r^T W r at the end
+  bool reached_target = false;
+};
+
+/// Solves A d = b over the free nodes by conjugate gradients preconditioned with the inverses of
+/// A's 3 x 3 diagonal blocks, starting from d (a warm start; zero it for none). O(nnz) per
+/// iteration, no allocation once `workspace` has grown to size.
+struct ConjugateGradientWorkspace {
+  std::vector<double> r, z, p, q;
+  std::vector<std::array<double, 9>> inverse_diagonal;
+  std::vector<double> partial;
+};
+ConjugateGradientReport conjugate_gradients(const BlockSparseMatrix& a, std::span<const double> b, std::span<double> d,
+                                            std::span<const std::uint8_t> free, std::span<const double> weight,
+                                            const ConjugateGradientOptions& options, ConjugateGradientWorkspace* workspace);
+
+}  // namespace tetcut::sim::detail

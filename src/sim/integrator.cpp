@@ -1,0 +1,309 @@
+// Backward Euler as energy minimisation (the incremental potential), by Newton's method over the
+// free nodes: projected element Hessians assembled into the block pattern, conjugate gradients
+// (or a sparse LDL^T), and a backtracking line search on the potential.
+//
+// Each Newton iteration costs one Hessian assembly, one linear solve and, usually, one trial
+// evaluation (energy and gradient at the full step), all O(tets) or O(nonzeros) on all cores. The
+// gradient at the accepted point serves both the next iteration and the convergence test: for a
+// dynamic step the Hessian is at least M / dt^2, so g^T H^-1 g <= dt^2 g^T M^-1 g bounds the
+// Newton decrement without a solve, and a step that passes it ends after its first solve.
+
+#include <tetcut/error.hpp>
+#include <tetcut/sim.hpp>
+
+#include "sim/simulator_state.hpp"
+
+#include <Eigen/SparseCholesky>
+
+#include <chrono>
+#include <cmath>
+
+namespace tetcut::sim {
+namespace {
+
+// Armijo's sufficient decrease: accept t when E(x + t d) <= E(x) - kArmijo t (-g . d).
+constexpr double kArmijo = 1e-4;
+// Halvings of the step before the line search gives up (t = 2^-40: the limit of precision).
+constexpr int kMaxHalvings = 40;
+// The linear solve aims to leave a residual worth this share of the convergence threshold, so
+// that the next gradient passes the test with room for the nonlinear terms of the step.
+constexpr double kSolveShare = 0.1;
+// After a step the line search had to shorten (strongly nonlinear), an accurate solve is wasted:
+// the next solve stops at this residual relative to its start (inexact Newton).
+constexpr double kInexactNewton = 0.1;
+
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
+
+// The potential's terms other than elasticity, at positions `at`, for the free nodes' gradient
+// (and Hessian). A Newton step's pieces, gathered so that energy, gradient and Hessian are written
+// once.
+struct Potential {
+  SimulatorState& s;
+  bool inertia;
+  double h;
+  Vec3 gravity;
+  double inertia_weight, damping_weight;
+  bool stiffness_damping;
+
+  // Inertia, mass damping and gravity per node; the Hessian's diagonal when `hessian`.
+  double nodal(const Points& at, std::vector<double>* g, bool hessian) const {
+    const Index n = s.num_nodes();
+    return detail::sum_chunks(n, detail::kNodeChunk, &s.partial, [&](Index begin, Index end) {
+      double energy = 0;
+      for (Index v = begin; v < end; ++v) {
+        const double m = s.mass[v];
+        const Vec3 p = at.row(v).transpose();
+        Vec3 grad = -m * gravity;
+        energy -= m * gravity.dot(p);
+        if (inertia) {
+          const Vec3 from_prediction = p - s.prediction.row(v).transpose(), from_start = p - s.start.row(v).transpose();
+          energy += 0.5 * m / (h * h) * from_prediction.squaredNorm() + 0.5 * m * s.material.mass_damping / h * from_start.squaredNorm();
+          grad += m / (h * h) * from_prediction + m * s.material.mass_damping / h * from_start;
+        }
+        for (int k = 0; k < 3; ++k) (*g)[3 * v + k] += grad[k];
+        if (hessian && inertia) {
+          double* block = s.hessian.block(s.hessian.diagonal_slot(v));
+          block[0] += m * inertia_weight;
+          block[4] += m * inertia_weight;
+          block[8] += m * inertia_weight;
+        }
+      }
+      return energy;
+    });
+  }
+
+  // Contact and springs: few, so one thread; Hessian entries found by binary search.
+  double constraints(const Points& at, std::vector<double>* g, bool hessian) const {
+    double energy = 0;
+    s.for_each_constraint(at, [&](const std::array<Index, 8>& nodes, const std::array<double, 8>& c, int count, double e,
+                                  const Vec3& dE, const Mat3& d2E) {
+      energy += e;
+      for (int a = 0; a < count; ++a) {
+        for (int i = 0; i < 3; ++i) (*g)[3 * nodes[a] + i] += c[a] * dE[i];
+        if (!hessian) continue;
+        for (int b = 0; b < count; ++b) {
+          double* block = s.hessian.block(s.hessian.slot(nodes[a], nodes[b]));
+          for (int i = 0; i < 3; ++i) {
+            for (int j = 0; j < 3; ++j) block[3 * i + j] += c[a] * c[b] * d2E(i, j);
+          }
+        }
+      }
+    });
+    return energy;
+  }
+
+  // Rayleigh stiffness damping: (damping_weight / 2) u^T K u with u = at - start and K the
+  // stiffness at the start of the step (s.damping_values over the pattern).
+  double damping(const Points& at, std::vector<double>* g, bool hessian) const {
+    if (!stiffness_damping) return 0;
+    const Index n = s.num_nodes();
+    s.displacement = at - s.start;
+    s.product.resize(3 * static_cast<std::size_t>(n));
+    s.all.assign(static_cast<std::size_t>(n), 1);
+    const double uKu = detail::sum_chunks(n, detail::kNodeChunk, &s.partial, [&](Index begin, Index end) {
+      return s.hessian.multiply_rows(begin, end, s.displacement.data(), s.product.data(), s.all.data(), s.damping_values.data());
+    });
+    for (std::size_t k = 0; k < s.product.size(); ++k) (*g)[k] += damping_weight * s.product[k];
+    if (hessian) {
+      std::vector<double>& values = s.hessian.values();
+      for (std::size_t k = 0; k < values.size(); ++k) values[k] += damping_weight * s.damping_values[k];
+    }
+    return 0.5 * damping_weight * uKu;
+  }
+
+  // The potential at `at` and its gradient (3 per node, written over `g`).
+  double evaluate(const Points& at, std::vector<double>* g) const {
+    std::fill(g->begin(), g->end(), 0.0);
+    double energy = s.elastic_gradient(at, g);
+    energy += nodal(at, g, false) + constraints(at, g, false) + damping(at, g, false);
+    return energy;
+  }
+  // The same, and the Hessian into s.hessian.
+  double evaluate_with_hessian(const Points& at, std::vector<double>* g) const {
+    std::fill(g->begin(), g->end(), 0.0);
+    double energy = s.assemble_hessian(at, g);
+    energy += nodal(at, g, true) + constraints(at, g, true) + damping(at, g, true);
+    return energy;
+  }
+};
+
+// The direct solve: the free nodes' part of the block matrix as an Eigen sparse matrix, LDL^T.
+bool solve_direct(const SimulatorState& s, std::vector<double>* d) {
+  const Index n = s.num_nodes();
+  std::vector<Index> dof(static_cast<std::size_t>(n), -1);
+  Index count = 0;
+  for (Index v = 0; v < n; ++v) {
+    if (s.free[v]) dof[v] = count++;
+  }
+  std::vector<Eigen::Triplet<double>> triplets;
+  const detail::BlockSparseMatrix& a = s.hessian;
+  // Walk the pattern row by row.
+  for (Index row = 0; row < n; ++row) {
+    if (dof[row] < 0) continue;
+    for (Index k = a.row_begin(row); k < a.row_end(row); ++k) {
+      const Index column = a.column(k);
+      if (dof[column] < 0) continue;
+      const double* b = a.block(k);
+      for (int i = 0; i < 3; ++i) {
+        for (int j = 0; j < 3; ++j) triplets.emplace_back(3 * dof[row] + i, 3 * dof[column] + j, b[3 * i + j]);
+      }
+    }
+  }
+  Eigen::SparseMatrix<double> matrix(3 * count, 3 * count);
+  matrix.setFromTriplets(triplets.begin(), triplets.end());
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(matrix);
+  if (ldlt.info() != Eigen::Success) return false;
+  Eigen::VectorXd b(3 * count);
+  for (Index v = 0; v < n; ++v) {
+    if (dof[v] >= 0) {
+      for (int k = 0; k < 3; ++k) b[3 * dof[v] + k] = s.rhs[3 * v + k];
+    }
+  }
+  const Eigen::VectorXd x = ldlt.solve(b);
+  if (ldlt.info() != Eigen::Success) return false;
+  for (Index v = 0; v < n; ++v) {
+    for (int k = 0; k < 3; ++k) (*d)[3 * v + k] = dof[v] >= 0 ? x[3 * dof[v] + k] : 0.0;
+  }
+  return true;
+}
+
+}  // namespace
+
+StepReport Simulator::step(const StepOptions& options) { return minimise(options, true); }
+
+StepReport Simulator::solve_static(const StepOptions& options) {
+  StepReport report = minimise(options, false);
+  state_->v.setZero();
+  return report;
+}
+
+StepReport Simulator::minimise(const StepOptions& options, bool inertia) {
+  if (inertia && !(options.dt > 0 && std::isfinite(options.dt))) throw Error(ErrorKind::kInvalidArgument, "the time step must be positive");
+  if (!(options.tolerance > 0) || !std::isfinite(options.tolerance)) throw Error(ErrorKind::kInvalidArgument, "the tolerance must be positive");
+  if (options.max_newton_iterations < 1) throw Error(ErrorKind::kInvalidArgument, "at least one Newton iteration is needed");
+  if (options.max_cg_iterations < 0) throw Error(ErrorKind::kInvalidArgument, "the conjugate gradient budget must not be negative");
+  if (!options.gravity.allFinite()) throw Error(ErrorKind::kInvalidArgument, "gravity must be finite");
+  SimulatorState& s = *state_;
+  const Clock::time_point assemble_start = Clock::now();
+  s.refresh_structure();
+  const double h = inertia ? options.dt : 1.0;
+  const Index n = s.num_nodes();
+  const std::size_t size = 3 * static_cast<std::size_t>(n);
+
+  // Free nodes: not constrained, and holding mass (a node in no tet has no energy at all).
+  s.free.resize(static_cast<std::size_t>(n));
+  for (Index v = 0; v < n; ++v) s.free[v] = s.constraint[v] < 0 && s.mass[v] > 0;
+  s.start = s.x;
+  s.prediction = inertia ? Points(s.x + h * s.v) : s.x;
+  Points& x = s.x;
+  x = s.prediction;
+  for (Index v = 0; v < n; ++v) {
+    if (s.constraint[v] >= 0) x.row(v) = s.target.row(v);
+  }
+  Potential potential{s, inertia, h, options.gravity, inertia ? 1 / (h * h) + s.material.mass_damping / h : 0.0, 0.0, false};
+  s.current_gradient.assign(size, 0.0);
+  s.trial_gradient.assign(size, 0.0);
+  s.direction.assign(size, 0.0);
+  s.rhs.assign(size, 0.0);
+  s.weight.assign(static_cast<std::size_t>(n), 0.0);
+
+  // Rayleigh stiffness damping uses the (projected) stiffness at the start of the step.
+  if (inertia && s.material.stiffness_damping > 0) {
+    s.assemble_hessian(s.start, &s.current_gradient);
+    s.damping_values = s.hessian.values();
+    potential.stiffness_damping = true;
+    potential.damping_weight = s.material.stiffness_damping / h;
+  }
+
+  double total_mass = s.mass.sum(), volume = 0;
+  for (const SimulatorState::Element& e : s.elements) volume += e.volume;
+  const double scale = inertia ? total_mass * s.size * s.size / (h * h) : s.parameters.mu * volume;
+  const double threshold = options.tolerance * options.tolerance * scale;
+  // The bound of half the Newton decrement from a gradient: (1/2) sum |g_v|^2 / (w m_v).
+  for (Index v = 0; v < n; ++v) s.weight[v] = inertia && s.free[v] ? 1 / (potential.inertia_weight * s.mass[v]) : 0.0;
+  const auto decrement_bound = [&](const std::vector<double>& g) {
+    double bound = 0;
+    for (Index v = 0; v < n; ++v) bound += s.weight[v] * (g[3 * v] * g[3 * v] + g[3 * v + 1] * g[3 * v + 1] + g[3 * v + 2] * g[3 * v + 2]);
+    return 0.5 * bound;
+  };
+
+  StepReport report;
+  double energy = potential.evaluate_with_hessian(x, &s.current_gradient);
+  bool hessian_current = true, full_step = true;
+  double last_half_decrement = 0;
+  report.assemble_seconds += seconds_since(assemble_start);
+  for (int iteration = 0; iteration < options.max_newton_iterations; ++iteration) {
+    if (!hessian_current) {
+      const Clock::time_point t0 = Clock::now();
+      energy = potential.evaluate_with_hessian(x, &s.current_gradient);
+      report.assemble_seconds += seconds_since(t0);
+    }
+    hessian_current = false;
+    const Clock::time_point solve_start = Clock::now();
+    for (std::size_t k = 0; k < size; ++k) s.rhs[k] = s.free[k / 3] ? -s.current_gradient[k] : 0.0;
+    std::fill(s.direction.begin(), s.direction.end(), 0.0);
+    if (options.solver == LinearSolver::kCholesky) {
+      if (!solve_direct(s, &s.direction)) throw Error(ErrorKind::kInvalidInput, "the Newton system could not be factorised");
+    } else {
+      if (!inertia) {
+        // No mass to measure the residual by: the diagonal's, an estimate of H^-1.
+        for (Index v = 0; v < n; ++v) {
+          const double* b = s.hessian.block(s.hessian.diagonal_slot(v));
+          const double diagonal = (b[0] + b[4] + b[8]) / 3;
+          s.weight[v] = s.free[v] && diagonal > 0 ? 1 / diagonal : 0.0;
+        }
+      }
+      detail::ConjugateGradientOptions cg;
+      cg.max_iterations = options.max_cg_iterations;
+      cg.absolute_target = 2 * kSolveShare * threshold;
+      cg.relative_target = full_step ? 0.0 : kInexactNewton;
+      const detail::ConjugateGradientReport solved = detail::conjugate_gradients(s.hessian, s.rhs, s.direction, s.free, s.weight, cg, &s.cg);
+      report.cg_iterations += solved.iterations;
+    }
+    report.solve_seconds += seconds_since(solve_start);
+    double decrement = 0;
+    for (std::size_t k = 0; k < size; ++k) decrement += s.rhs[k] * s.direction[k];
+    report.newton_iterations = iteration + 1;
+    last_half_decrement = decrement / 2;
+    if (!(decrement >= 0) || !std::isfinite(decrement)) break;  // not a descent direction: give up
+    if (decrement / 2 <= threshold) {
+      report.converged = true;
+      break;
+    }
+    // Backtracking (Armijo) on the potential.
+    const Clock::time_point search_start = Clock::now();
+    double t = 1;
+    bool accepted = false;
+    for (int halving = 0; halving < kMaxHalvings; ++halving) {
+      s.trial = x;
+      for (Index v = 0; v < n; ++v) {
+        if (!s.free[v]) continue;
+        for (int k = 0; k < 3; ++k) s.trial(v, k) += t * s.direction[3 * v + k];
+      }
+      const double trial_energy = potential.evaluate(s.trial, &s.trial_gradient);
+      if (trial_energy <= energy - kArmijo * t * decrement) {
+        x.swap(s.trial);
+        s.current_gradient.swap(s.trial_gradient);
+        energy = trial_energy;
+        accepted = true;
+        break;
+      }
+      t /= 2;
+    }
+    full_step = t == 1;
+    report.line_search_seconds += seconds_since(search_start);
+    if (!accepted) break;  // at the limit of precision
+    if (inertia && decrement_bound(s.current_gradient) <= threshold) {
+      report.converged = true;
+      break;
+    }
+  }
+  report.energy = energy;
+  const double left = inertia ? decrement_bound(s.current_gradient) : last_half_decrement;
+  report.residual = std::sqrt(std::max(left, 0.0) / scale);
+  if (inertia) s.v = (x - s.start) / h;
+  return report;
+}
+
+}  // namespace tetcut::sim

@@ -1,0 +1,128 @@
+#pragma once
+// What a Simulator holds, shared by its parts: the mesh's elements and nodes (simulator.cpp), the
+// element loops that evaluate and assemble them (assembly.cpp), and the Newton integrator
+// (integrator.cpp).
+
+#include "sim/block_sparse.hpp"
+#include "sim/elasticity.hpp"
+
+#include <tetcut/sim.hpp>
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+namespace tetcut::sim {
+
+struct SimulatorState {
+  struct Element {
+    std::array<Index, 4> nodes;
+    detail::ShapeWeights weights;  // dF/dx: F = sum_a x_a w_a^T
+    double volume;                 // rest volume times the material fraction
+  };
+  struct Spring {
+    EmbeddedPoint p, q;
+    double stiffness;
+  };
+
+  Material material;
+  Lame parameters;
+  std::vector<Element> elements;
+  /// Each element's V from its last SVD: the next one starts there (the deformation changes
+  /// little between Newton iterations and steps, so Jacobi needs fewer sweeps).
+  std::vector<Mat3> element_v;
+  std::vector<EmbeddedPoint> contact_points;
+  std::vector<Obstacle> obstacles;
+  double contact_stiffness = 0;
+  bool contact_stiffness_given = false;
+  std::vector<Spring> springs;
+  Points x, v;
+  Eigen::VectorXd mass;
+  double size = 1;
+  /// Per node: -1 free, 0 pinned, 1 moved to target.
+  std::vector<std::int8_t> constraint;
+  Points target;
+
+  // The elements grouped by colour: no two of a colour share a node, so a colour scatters into
+  // node vectors and the matrix on all threads at once, and every entry receives its terms in
+  // colour order whatever the threads. Rebuilt with the elements.
+  std::vector<Index> color_start, color_elements;
+  // The Newton system's structure: the block pattern of elements and springs and each element's
+  // 16 slots in it. Rebuilt at the next step after the mesh or the springs changed.
+  bool structure_stale = true;
+  detail::BlockSparseMatrix hessian;
+  std::vector<std::array<Index, 16>> element_slots;
+
+  // Scratch reused from step to step, so that a step allocates nothing once sizes settle (and
+  // why a Simulator, even through const calls, is for one thread at a time).
+  detail::ConjugateGradientWorkspace cg;
+  mutable std::vector<double> partial;
+  std::vector<double> damping_values;  // the stiffness at the start of a step, for Rayleigh damping
+  std::vector<double> current_gradient, trial_gradient, direction, rhs, weight, product;
+  std::vector<std::uint8_t> free, all;
+  Points start, prediction, trial, displacement;
+
+  Index num_nodes() const { return static_cast<Index>(x.rows()); }
+  Mat3 deformation_gradient(const Element& e, const Points& at) const {
+    return detail::deformation_gradient(e.weights, at.row(e.nodes[0]).transpose(), at.row(e.nodes[1]).transpose(),
+                                        at.row(e.nodes[2]).transpose(), at.row(e.nodes[3]).transpose());
+  }
+
+  /// Rebuilds elements, masses and colours from a mesh (constructor and remesh).
+  void build(const TetMesh& mesh, std::span<const double> volume_fraction);
+  /// Greedy colouring of the elements. O(tets) while 64 colours suffice (a node in at most about
+  /// 60 tets), O(sum of squared node degrees) beyond.
+  void assign_colors();
+  /// Rebuilds the pattern, slots and colours if stale. O(tets), parallel over nodes.
+  void refresh_structure();
+
+  /// Elastic energy at `at` (sum of volume * Psi), deterministic. O(tets), parallel.
+  double elastic_energy(const Points& at) const;
+  /// Elastic energy at `at`, adding its gradient into `gradient` (3 per node). O(tets), parallel
+  /// by colour.
+  double elastic_gradient(const Points& at, std::vector<double>* gradient) const;
+  /// The same, and the projected Hessian into the pattern's values (which it zeroes first);
+  /// updates the elements' SVD warm starts. Needs a fresh structure (refresh_structure).
+  double assemble_hessian(const Points& at, std::vector<double>* gradient);
+
+  /// The soft constraints as energies of one point y = sum_i c_i x_{n_i} (up to 8 nodes); calls
+  /// visit(nodes, coefficients, count, energy, dE/dy, d2E/dy2) for each active one at `at`.
+  template <typename Visit>
+  void for_each_constraint(const Points& at, Visit&& visit) const;
+};
+
+template <typename Visit>
+void SimulatorState::for_each_constraint(const Points& at, Visit&& visit) const {
+  std::array<Index, 8> nodes;
+  std::array<double, 8> coefficients;
+  for (const EmbeddedPoint& point : contact_points) {
+    Vec3 y = Vec3::Zero();
+    for (int k = 0; k < 4; ++k) {
+      nodes[k] = elements[point.tet].nodes[k];
+      coefficients[k] = point.weights[k];
+      y += coefficients[k] * at.row(nodes[k]).transpose();
+    }
+    for (const Obstacle& obstacle : obstacles) {
+      Vec3 n;
+      const double d = obstacle.distance(y, &n);
+      if (d >= 0) continue;
+      // (k / 2) d^2; the Hessian keeps the normal part only (positive semi-definite).
+      visit(nodes, coefficients, 4, 0.5 * contact_stiffness * d * d, Vec3(contact_stiffness * d * n),
+            Mat3(contact_stiffness * n * n.transpose()));
+    }
+  }
+  for (const Spring& spring : springs) {
+    Vec3 y = Vec3::Zero();
+    for (int k = 0; k < 4; ++k) {
+      nodes[k] = elements[spring.p.tet].nodes[k];
+      nodes[k + 4] = elements[spring.q.tet].nodes[k];
+      coefficients[k] = spring.p.weights[k];
+      coefficients[k + 4] = -spring.q.weights[k];
+    }
+    for (int k = 0; k < 8; ++k) y += coefficients[k] * at.row(nodes[k]).transpose();
+    visit(nodes, coefficients, 8, 0.5 * spring.stiffness * y.squaredNorm(), Vec3(spring.stiffness * y),
+          Mat3(spring.stiffness * Mat3::Identity()));
+  }
+}
+
+}  // namespace tetcut::sim

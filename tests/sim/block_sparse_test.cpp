@@ -1,0 +1,176 @@
+// The Newton system's matrix and solver: the block pattern holds exactly the couplings of tets
+// and spring groups, the masked product is the dense product over free nodes, and conjugate
+// gradients solve to their target with the same bits on one thread and on several.
+
+#include <gtest/gtest.h>
+
+#include <tetcut/generators.hpp>
+
+#include "sim/block_sparse.hpp"
+
+#include <Eigen/Dense>
+#include <tbb/task_arena.h>
+
+#include <random>
+#include <set>
+
+namespace tetcut::sim::detail {
+namespace {
+
+std::vector<std::array<Index, 4>> tets_of(const TetMesh& mesh) {
+  std::vector<std::array<Index, 4>> tets(static_cast<std::size_t>(mesh.num_tets()));
+  for (Index t = 0; t < mesh.num_tets(); ++t) {
+    for (int k = 0; k < 4; ++k) tets[t][k] = mesh.tets()(t, k);
+  }
+  return tets;
+}
+
+TEST(BlockSparseMatrix, PatternHoldsExactlyTheCouplings) {
+  const TetMesh mesh = make_bcc(Box{Vec3(0, 0, 0), Vec3(1, 1, 1)}, 0.25);
+  const auto tets = tets_of(mesh);
+  const std::vector<std::array<Index, 8>> extra{{0, 1, 2, 3, mesh.num_nodes() - 4, mesh.num_nodes() - 3, mesh.num_nodes() - 2, mesh.num_nodes() - 1}};
+  BlockSparseMatrix a;
+  std::vector<std::array<Index, 16>> slots;
+  a.build(mesh.num_nodes(), tets, extra, &slots);
+  std::set<std::pair<Index, Index>> expected;
+  for (Index n = 0; n < mesh.num_nodes(); ++n) expected.insert({n, n});
+  for (const auto& t : tets) {
+    for (const Index i : t) {
+      for (const Index j : t) expected.insert({i, j});
+    }
+  }
+  for (const Index i : extra[0]) {
+    for (const Index j : extra[0]) expected.insert({i, j});
+  }
+  ASSERT_EQ(a.num_blocks(), static_cast<Index>(expected.size()));
+  for (const auto& [i, j] : expected) EXPECT_GE(a.slot(i, j), 0);
+  for (Index row = 0; row < a.num_rows(); ++row) {
+    for (Index k = a.row_begin(row) + 1; k < a.row_end(row); ++k) EXPECT_LT(a.column(k - 1), a.column(k));
+    EXPECT_EQ(a.column(a.diagonal_slot(row)), row);
+  }
+  for (std::size_t t = 0; t < tets.size(); ++t) {
+    for (int i = 0; i < 4; ++i) {
+      for (int j = 0; j < 4; ++j) EXPECT_EQ(slots[t][4 * i + j], a.slot(tets[t][i], tets[t][j]));
+    }
+  }
+  EXPECT_EQ(a.slot(0, mesh.num_nodes() - 1) >= 0, true);
+}
+
+// A random symmetric positive definite matrix on a mesh's pattern: per tet a random Gram matrix,
+// plus a diagonal.
+BlockSparseMatrix random_system(const TetMesh& mesh, Eigen::MatrixXd* dense, std::uint64_t seed) {
+  const auto tets = tets_of(mesh);
+  BlockSparseMatrix a;
+  std::vector<std::array<Index, 16>> slots;
+  a.build(mesh.num_nodes(), tets, {}, &slots);
+  const Index n = mesh.num_nodes();
+  *dense = Eigen::MatrixXd::Zero(3 * n, 3 * n);
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u(-1, 1);
+  for (std::size_t t = 0; t < tets.size(); ++t) {
+    Eigen::Matrix<double, 12, 12> g;
+    for (int k = 0; k < 144; ++k) g.data()[k] = u(rng);
+    const Eigen::Matrix<double, 12, 12> h = g * g.transpose() / 12;
+    for (int i = 0; i < 4; ++i) {
+      for (int j = 0; j < 4; ++j) {
+        double* block = a.block(slots[t][4 * i + j]);
+        for (int r = 0; r < 3; ++r) {
+          for (int c = 0; c < 3; ++c) {
+            block[3 * r + c] += h(3 * i + r, 3 * j + c);
+            (*dense)(3 * tets[t][i] + r, 3 * tets[t][j] + c) += h(3 * i + r, 3 * j + c);
+          }
+        }
+      }
+    }
+  }
+  for (Index v = 0; v < n; ++v) {
+    double* block = a.block(a.diagonal_slot(v));
+    for (int k = 0; k < 3; ++k) {
+      block[4 * k] += 0.5;
+      (*dense)(3 * v + k, 3 * v + k) += 0.5;
+    }
+  }
+  return a;
+}
+
+TEST(BlockSparseMatrix, MaskedProductIsTheDenseProductOverFreeNodes) {
+  const TetMesh mesh = make_bcc(Box{Vec3(0, 0, 0), Vec3(1, 1, 1)}, 0.3);
+  Eigen::MatrixXd dense;
+  const BlockSparseMatrix a = random_system(mesh, &dense, 3);
+  const Index n = mesh.num_nodes();
+  std::vector<std::uint8_t> free(static_cast<std::size_t>(n));
+  Eigen::VectorXd x = Eigen::VectorXd::Random(3 * n);
+  for (Index v = 0; v < n; ++v) {
+    free[v] = v % 5 != 0;
+    if (!free[v]) x.segment<3>(3 * v).setZero();  // the solver keeps vectors zero there
+  }
+  Eigen::VectorXd y(3 * n);
+  a.multiply(x.data(), y.data(), free.data());
+  Eigen::VectorXd expected = dense * x;
+  for (Index v = 0; v < n; ++v) {
+    if (!free[v]) expected.segment<3>(3 * v).setZero();
+  }
+  EXPECT_LT((y - expected).norm(), 1e-12 * expected.norm());
+}
+
+TEST(ConjugateGradients, SolveToTheTargetAndDoNotDependOnThreads) {
+  const TetMesh mesh = make_bcc(Box{Vec3(0, 0, 0), Vec3(1, 1, 2)}, 0.2);
+  Eigen::MatrixXd dense;
+  const BlockSparseMatrix a = random_system(mesh, &dense, 8);
+  const Index n = mesh.num_nodes();
+  std::vector<std::uint8_t> free(static_cast<std::size_t>(n), 1);
+  for (Index v = 0; v < n; v += 7) free[v] = 0;
+  std::vector<double> b(3 * static_cast<std::size_t>(n)), weight(static_cast<std::size_t>(n), 1.0);
+  std::mt19937_64 rng(4);
+  std::uniform_real_distribution<double> u(-1, 1);
+  for (Index v = 0; v < n; ++v) {
+    for (int k = 0; k < 3; ++k) b[3 * v + k] = free[v] ? u(rng) : 0.0;
+  }
+  ConjugateGradientOptions options;
+  options.relative_target = 1e-10;
+  const auto solve = [&](int threads) {
+    std::vector<double> d(b.size(), 0.0);
+    ConjugateGradientWorkspace workspace;
+    ConjugateGradientReport report;
+    tbb::task_arena(threads).execute([&] { report = conjugate_gradients(a, b, d, free, weight, options, &workspace); });
+    EXPECT_TRUE(report.reached_target);
+    return std::pair(d, report.iterations);
+  };
+  const auto [one, iterations_one] = solve(1);
+  const auto [two, iterations_two] = solve(2);
+  EXPECT_EQ(one, two);  // bit for bit
+  EXPECT_EQ(iterations_one, iterations_two);
+  // The solution of the free nodes' system.
+  std::vector<Index> dof;
+  for (Index v = 0; v < n; ++v) {
+    if (free[v]) {
+      for (int k = 0; k < 3; ++k) dof.push_back(3 * v + k);
+    }
+  }
+  Eigen::MatrixXd reduced(dof.size(), dof.size());
+  Eigen::VectorXd rhs(dof.size());
+  for (std::size_t i = 0; i < dof.size(); ++i) {
+    rhs[i] = b[dof[i]];
+    for (std::size_t j = 0; j < dof.size(); ++j) reduced(i, j) = dense(dof[i], dof[j]);
+  }
+  const Eigen::VectorXd exact = reduced.llt().solve(rhs);
+  double error = 0;
+  for (std::size_t i = 0; i < dof.size(); ++i) error = std::max(error, std::abs(one[dof[i]] - exact[i]));
+  EXPECT_LT(error, 1e-8 * exact.cwiseAbs().maxCoeff());
+  for (Index v = 0; v < n; ++v) {
+    if (!free[v]) {
+      EXPECT_EQ(one[3 * v], 0.0);
+    }
+  }
+  // A budget stops it early, short of the target.
+  options.max_iterations = 3;
+  std::vector<double> d(b.size(), 0.0);
+  ConjugateGradientWorkspace workspace;
+  const ConjugateGradientReport capped = conjugate_gradients(a, b, d, free, weight, options, &workspace);
+  EXPECT_EQ(capped.iterations, 3);
+  EXPECT_FALSE(capped.reached_target);
+  EXPECT_GT(capped.weighted_residual, 0);
+}
+
+}  // namespace
+}  // namespace tetcut::sim::detail
