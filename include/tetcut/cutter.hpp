@@ -19,6 +19,7 @@
 #include <array>
 #include <cstdint>
 #include <memory>
+#include <span>
 #include <vector>
 
 namespace tetcut {
@@ -146,6 +147,12 @@ class Cutter {
   const std::vector<std::array<Index, 4>>& tet_nodes() const;
   const std::vector<Index>& node_parent() const;
   const std::vector<Index>& tet_parent() const;
+  /// The copies of input tet `tet` (empty when it holds no material), valid until the next batch.
+  std::span<const Index> copies_of(Index tet) const;
+  /// The fraction of its tet's volume that copy `copy` holds as material, as
+  /// CutMesh::material_fractions gives it (the same bits). O(cells of its tet): after a batch, a
+  /// simulator asks only for the copies of the tets the batch touched.
+  double material_fraction(Index copy) const;
 
   /// The material surface as it stands. The surface is kept in patches, one per input tet; a
   /// batch marks the patches of the tets it touched and of their neighbours, and only those are

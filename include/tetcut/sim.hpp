@@ -164,6 +164,11 @@ class Simulator {
   /// again).
   void remesh(const TetMesh& mesh, std::span<const double> volume_fraction, Index first_new_node,
               std::span<const Index> new_node_source);
+  /// The same straight from the cutter after a batch (its report), for a simulator whose mesh is
+  /// the cutter's before that batch: only the copies of the tets the batch touched are rebuilt
+  /// (with Cutter::material_fraction), the rest is linear passes, and no CutResult is needed.
+  /// What a live session calls after every blade step.
+  void remesh(const Cutter& cutter, const CutBatchReport& batch);
 
   Index num_nodes() const;
   Index num_tets() const;
@@ -193,7 +198,7 @@ class Simulator {
   /// Error(kInvalidArgument) when a point names a tet that does not exist.
   void set_contact_points(std::vector<EmbeddedPoint> points);
   void add_obstacle(const Obstacle& obstacle);
-  /// N/m; by default 10 E h, with h the mean edge length of the rest mesh.
+  /// N/m; by default 10 E h, with h the mean edge length of the mesh the simulator was made with.
   void set_contact_stiffness(double stiffness);
   double contact_stiffness() const;
   /// A zero-rest-length spring (stiffness / 2) |p - q|^2 between two points, e.g. across an

@@ -58,6 +58,10 @@ Index Cutter::num_tets() const { return state_->copies.num_copies(); }
 const std::vector<std::array<Index, 4>>& Cutter::tet_nodes() const { return state_->copies.copy_nodes(); }
 const std::vector<Index>& Cutter::node_parent() const { return state_->copies.node_parent(); }
 const std::vector<Index>& Cutter::tet_parent() const { return state_->copies.copy_tet(); }
+std::span<const Index> Cutter::copies_of(Index tet) const {
+  if (tet < 0 || tet >= state_->mesh.num_tets()) throw Error(ErrorKind::kInvalidArgument, "copies_of: no such input tet");
+  return state_->copies.copies_of(tet);
+}
 
 void Cutter::State::insert_rest(const TriangleSurface& batch, CutBatchReport* report, std::vector<Index>* touched) {
   check_batch(batch);
@@ -276,6 +280,22 @@ CutBatchReport Cutter::cut_deformed(const TriangleSurface& batch) {
                                 report.skipped_inverted.end());
   s.finish_batch(std::move(touched), &report);
   return report;
+}
+
+double Cutter::material_fraction(Index copy) const {
+  const State& s = *state_;
+  if (copy < 0 || copy >= num_tets()) throw Error(ErrorKind::kInvalidArgument, "material_fraction: no such tet copy");
+  const Index t = s.copies.copy_tet()[copy];
+  const Points& rest = s.mesh.rest();
+  const Tets& tets = s.mesh.tets();
+  const double volume = signed_volume(rest.row(tets(t, 0)), rest.row(tets(t, 1)), rest.row(tets(t, 2)), rest.row(tets(t, 3)));
+  if (!s.complex.refined(t)) return s.complex.tet_material(t) ? 1.0 : 0.0;
+  // Summed as connectivity::find_pieces sums a copy's material volume: cell by cell, in order.
+  double material = 0;
+  for (cells::CellId c = s.complex.first_cell(t); c >= 0; c = s.complex.cells()[c].next_in_tet) {
+    if (s.components.cell_component[c] >= 0 && s.complex.cells()[c].label == copy) material += s.components.cell_volume6[c] / 6;
+  }
+  return material / volume;
 }
 
 MaterialSurface Cutter::surface() {

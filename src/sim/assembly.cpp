@@ -98,7 +98,7 @@ double SimulatorState::elastic_energy(const Points& at) const {
     double sum = 0;
     for (Index i = begin; i < end; ++i) {
       const Element& e = elements[i];
-      sum += e.volume * detail::energy_and_stress(material.model, parameters, deformation_gradient(e, at), nullptr);
+      sum += e.volume * detail::energy_and_stress(material.model, parameters, detail::deformation_gradient(e.weights, at.data(), e.nodes), nullptr);
     }
     return sum;
   });
@@ -129,7 +129,7 @@ double SimulatorState::elastic_gradient(const Points& at, std::vector<double>* g
   return by_color(color_start, color_elements, &partial, [&](Index i) {
     const Element& e = elements[i];
     Mat3 P;
-    const double psi = detail::energy_and_stress(material.model, parameters, deformation_gradient(e, at), &P);
+    const double psi = detail::energy_and_stress(material.model, parameters, detail::deformation_gradient(e.weights, at.data(), e.nodes), &P);
     scatter(e.nodes, detail::element_gradient(e.weights, e.volume, P), gradient->data());
     return e.volume * psi;
   });
@@ -140,16 +140,22 @@ double SimulatorState::assemble_hessian(const Points& at, std::vector<double>* g
   return by_color(color_start, color_elements, &partial, [&](Index i) {
     const Element& e = elements[i];
     Mat3 P;
-    detail::Mat12 h;
-    const double psi = detail::element_hessian(material.model, parameters, deformation_gradient(e, at), e.weights, e.volume,
-                                               &element_v[i], &P, &h);
+    detail::HessianFactor q;
+    const double psi = detail::element_hessian_factor(material.model, parameters, detail::deformation_gradient(e.weights, at.data(), e.nodes),
+                                                      e.weights, e.volume, &element_v[i], &P, &q);
     scatter(e.nodes, detail::element_gradient(e.weights, e.volume, P), gradient->data());
+    // The 10 distinct blocks of Q Q^T; each off-diagonal one also goes, transposed, to its mirror.
     const std::array<Index, 16>& slots = element_slots[i];
+    double block[9];
     for (int a = 0; a < 4; ++a) {
-      for (int b = 0; b < 4; ++b) {
-        double* block = hessian.block(slots[4 * a + b]);
+      for (int b = a; b < 4; ++b) {
+        detail::factor_block(q, a, b, block);
+        double* upper = hessian.block(slots[4 * a + b]);
+        for (int k = 0; k < 9; ++k) upper[k] += block[k];
+        if (b == a) continue;
+        double* lower = hessian.block(slots[4 * b + a]);
         for (int r = 0; r < 3; ++r) {
-          for (int c = 0; c < 3; ++c) block[3 * r + c] += h(3 * a + r, 3 * b + c);
+          for (int c = 0; c < 3; ++c) lower[3 * c + r] += block[3 * r + c];
         }
       }
     }

@@ -106,34 +106,43 @@ double energy_and_stress(Model model, const Lame& p, const Mat3& F, Mat3* stress
   return p.mu * (d.sigma - Vec3::Ones()).squaredNorm() + 0.5 * p.lambda * (J - 1) * (J - 1);
 }
 
-double element_hessian(Model model, const Lame& p, const Mat3& F, const ShapeWeights& w, double volume, Mat3* v_guess,
-                       Mat3* stress, Mat12* hessian) {
+double element_hessian_factor(Model model, const Lame& p, const Mat3& F, const ShapeWeights& w, double volume, Mat3* v_guess,
+                              Mat3* stress, HessianFactor* q) {
   // Corotated's energy needs the exact polar rotation; stable Neo-Hookean's only its Hessian.
   const Svd3 svd = svd3(F, model == Model::kCorotated ? kSvdExact : kSvdForHessian, v_guess);
   *v_guess = svd.V;
   const double energy = energy_and_stress(model, p, F, stress, &svd);
   const StressEigensystem e = stress_eigensystem(model, p, svd);
-  // Columns: the 12-vectors B^T m of the nine eigenmatrices, each scaled by its clamped
-  // eigenvalue's square root, so that the Hessian is volume * Q Q^T.
   const ShapeWeights w_frame = w * svd.V;  // row a: V^T w_a
   const Mat3& U = svd.U;
-  Eigen::Matrix<double, 12, 9> q;
+  // Twist and flip about axis k: U (e_i e_j^T -/+ e_j e_i^T) V^T / sqrt 2 maps w_a to
+  // (u_i (V^T w_a)_j -/+ u_j (V^T w_a)_i) / sqrt 2.
+  const double half_volume = 0.5 * volume;
   for (int k = 0; k < 3; ++k) {
     const auto [i, j] = kPairs[k];
-    const double twist = std::sqrt(0.5 * std::max(e.twist[k], 0.0)), flip = std::sqrt(0.5 * std::max(e.flip[k], 0.0));
+    const double twist = std::sqrt(half_volume * std::max(e.twist[k], 0.0)), flip = std::sqrt(half_volume * std::max(e.flip[k], 0.0));
     for (int a = 0; a < 4; ++a) {
-      const Vec3 along_i = w_frame(a, j) * U.col(i), along_j = w_frame(a, i) * U.col(j);
-      q.block<3, 1>(3 * a, 2 * k) = twist * (along_i - along_j);
-      q.block<3, 1>(3 * a, 2 * k + 1) = flip * (along_i + along_j);
+      for (int r = 0; r < 3; ++r) {
+        const double along_i = w_frame(a, j) * U(r, i), along_j = w_frame(a, i) * U(r, j);
+        (*q)(3 * a + r, 2 * k) = twist * (along_i - along_j);
+        (*q)(3 * a + r, 2 * k + 1) = flip * (along_i + along_j);
+      }
     }
   }
-  const Mat3 factor = positive_part_factor(e.scaling);
+  // Scaling direction m: U diag(factor column m) V^T w_a = U (factor column m .* V^T w_a).
+  const Mat3 factor = std::sqrt(volume) * positive_part_factor(e.scaling);
   for (int a = 0; a < 4; ++a) {
-    // Scaling direction m: U diag(factor column m) V^T w_a = U (factor column m .* V^T w_a).
     const Mat3 scaled = factor.array().colwise() * w_frame.row(a).transpose().array();
-    q.block<3, 3>(3 * a, 6) = U * scaled;
+    q->block<3, 3>(3 * a, 6) = U * scaled;
   }
-  hessian->noalias() = volume * q * q.transpose();
+  return energy;
+}
+
+double element_hessian(Model model, const Lame& p, const Mat3& F, const ShapeWeights& w, double volume, Mat3* v_guess,
+                       Mat3* stress, Mat12* hessian) {
+  HessianFactor q;
+  const double energy = element_hessian_factor(model, p, F, w, volume, v_guess, stress, &q);
+  hessian->noalias() = q.lazyProduct(q.transpose());
   return energy;
 }
 

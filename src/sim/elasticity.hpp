@@ -18,6 +18,8 @@
 
 #include <tetcut/sim.hpp>
 
+#include <array>
+
 namespace tetcut::sim::detail {
 
 using Vec9 = Eigen::Matrix<double, 9, 1>;
@@ -46,6 +48,20 @@ double energy_and_stress(Model model, const Lame& p, const Mat3& F, Mat3* stress
 inline Mat3 deformation_gradient(const ShapeWeights& w, const Vec3& x0, const Vec3& x1, const Vec3& x2, const Vec3& x3) {
   return x0 * w.row(0) + x1 * w.row(1) + x2 * w.row(2) + x3 * w.row(3);
 }
+/// The same from node positions stored 3 per node (`x`, node-major) and the tet's nodes.
+inline Mat3 deformation_gradient(const ShapeWeights& w, const double* x, const std::array<Index, 4>& nodes) {
+  Mat3 F = Mat3::Zero();
+  for (int a = 0; a < 4; ++a) {
+    const double* p = x + 3 * static_cast<std::size_t>(nodes[a]);
+    for (int j = 0; j < 3; ++j) {
+      const double wj = w(a, j);
+      F(0, j) += p[0] * wj;
+      F(1, j) += p[1] * wj;
+      F(2, j) += p[2] * wj;
+    }
+  }
+  return F;
+}
 
 /// The gradient of volume * Psi with respect to the tet's 12 node coordinates, from P.
 inline Vec12 element_gradient(const ShapeWeights& w, double volume, const Mat3& P) {
@@ -54,12 +70,32 @@ inline Vec12 element_gradient(const ShapeWeights& w, double volume, const Mat3& 
   return g;
 }
 
+/// A factor Q of the element Hessian, H = Q Q^T: row 3a + i for node a, coordinate i; a column
+/// per eigenmatrix of dP/dF.
+using HessianFactor = Eigen::Matrix<double, 12, 9, Eigen::RowMajor>;
+
 /// The projected Hessian of volume * Psi(F(x)) with respect to the tet's 12 node coordinates
-/// (node-major, x y z), positive semi-definite by construction: a sum of rank-one terms
-/// volume lambda+ (B^T m)(B^T m)^T over the eigenmatrices m of dP/dF, where (B^T m)_a = m w_a.
-/// `v_guess` warm starts the SVD (the element's V from its last Hessian) and receives the new V.
-/// Returns the energy density; `stress` receives P. About 1.5k flops.
+/// (node-major, x y z) as a factor: the columns of Q are sqrt(volume lambda+) B^T m over the
+/// eigenmatrices m of dP/dF (eigenvalues lambda, clamped at zero), where (B^T m)_a = m w_a. So H
+/// is positive semi-definite by construction, however accurate the SVD. `v_guess` warm starts the
+/// SVD (the element's V from its last Hessian) and receives the new V. Returns the energy
+/// density; `stress` receives P. About 600 flops.
+double element_hessian_factor(Model model, const Lame& p, const Mat3& F, const ShapeWeights& w, double volume, Mat3* v_guess,
+                              Mat3* stress, HessianFactor* q);
+/// The same as a 12 x 12 matrix (for tests and small uses).
 double element_hessian(Model model, const Lame& p, const Mat3& F, const ShapeWeights& w, double volume, Mat3* v_guess,
                        Mat3* stress, Mat12* hessian);
+/// Block (a, b) of Q Q^T, 3 x 3 row-major: rows 3a.. of Q times rows 3b.. transposed.
+inline void factor_block(const HessianFactor& q, int a, int b, double* out) {
+  for (int r = 0; r < 3; ++r) {
+    const double* qa = q.data() + 9 * (3 * a + r);
+    for (int c = 0; c < 3; ++c) {
+      const double* qb = q.data() + 9 * (3 * b + c);
+      double sum = 0;
+      for (int m = 0; m < 9; ++m) sum += qa[m] * qb[m];
+      out[3 * r + c] = sum;
+    }
+  }
+}
 
 }  // namespace tetcut::sim::detail

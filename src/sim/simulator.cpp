@@ -22,43 +22,51 @@ constexpr double kFractionRounding = 1e-9;
 
 }  // namespace
 
+void SimulatorState::set_element(Index t, const std::array<Index, 4>& nodes, const std::array<Vec3, 4>& rest, double fraction) {
+  Element& e = elements[t];
+  e.nodes = nodes;
+  Mat3 dm;
+  for (int k = 0; k < 3; ++k) dm.col(k) = rest[k + 1] - rest[0];
+  const Mat3 inverse = dm.inverse();
+  e.weights.bottomRows<3>() = inverse;
+  e.weights.row(0) = -inverse.colwise().sum();
+  if (!(fraction >= 0 && fraction <= 1 + kFractionRounding)) {
+    throw Error(ErrorKind::kInvalidArgument, "volume fraction of tet " + std::to_string(t) + " is not in [0, 1]");
+  }
+  e.volume = dm.determinant() / 6 * std::clamp(fraction, kMinVolumeFraction, 1.0);
+}
+
+void SimulatorState::finish_elements() {
+  mass = Eigen::VectorXd::Zero(num_nodes());
+  for (const Element& e : elements) {
+    for (const Index n : e.nodes) mass[n] += material.density * e.volume / 4;
+  }
+  // A new element's SVD starts from scratch unless the caller knows better (a cut copy starts
+  // from its source's).
+  element_v.resize(elements.size(), Mat3::Identity());
+  assign_colors();
+  structure_stale = true;
+}
+
 void SimulatorState::build(const TetMesh& mesh, std::span<const double> volume_fraction) {
   if (!volume_fraction.empty() && static_cast<Index>(volume_fraction.size()) != mesh.num_tets()) {
     throw Error(ErrorKind::kInvalidArgument, "volume fractions: " + std::to_string(volume_fraction.size()) +
                                                  " values for " + std::to_string(mesh.num_tets()) + " tets");
   }
   const Points& rest = mesh.rest();
-  mass = Eigen::VectorXd::Zero(mesh.num_nodes());
   elements.resize(static_cast<std::size_t>(mesh.num_tets()));
   for (Index t = 0; t < mesh.num_tets(); ++t) {
-    Element& e = elements[t];
-    for (int k = 0; k < 4; ++k) e.nodes[k] = mesh.tets()(t, k);
-    Mat3 dm;
-    for (int k = 0; k < 3; ++k) dm.col(k) = (rest.row(e.nodes[k + 1]) - rest.row(e.nodes[0])).transpose();
-    const Mat3 inverse = dm.inverse();
-    e.weights.bottomRows<3>() = inverse;
-    e.weights.row(0) = -inverse.colwise().sum();
-    double fraction = volume_fraction.empty() ? 1.0 : volume_fraction[t];
-    if (!(fraction >= 0 && fraction <= 1 + kFractionRounding)) {
-      throw Error(ErrorKind::kInvalidArgument, "volume fraction of tet " + std::to_string(t) + " is not in [0, 1]");
+    std::array<Index, 4> nodes;
+    std::array<Vec3, 4> corners;
+    for (int k = 0; k < 4; ++k) {
+      nodes[k] = mesh.tets()(t, k);
+      corners[k] = rest.row(nodes[k]).transpose();
     }
-    fraction = std::clamp(fraction, kMinVolumeFraction, 1.0);
-    e.volume = dm.determinant() / 6 * fraction;
-    for (const Index n : e.nodes) mass[n] += material.density * e.volume / 4;
+    set_element(t, nodes, corners, volume_fraction.empty() ? 1.0 : volume_fraction[t]);
   }
-  // A new element's SVD starts from scratch; an old one keeps its warm start (tets keep their
-  // ids over a cut, and a copy's shape is that of its tet).
-  element_v.resize(elements.size(), Mat3::Identity());
   const Vec3 extent = rest.colwise().maxCoeff() - rest.colwise().minCoeff();
   size = std::max(extent.norm(), std::numeric_limits<double>::min());
-  assign_colors();
-  structure_stale = true;
-  if (contact_stiffness_given) return;
-  double edges = 0;
-  for (const Element& e : elements) {
-    for (const auto& edge : kTetEdges) edges += (rest.row(e.nodes[edge[0]]) - rest.row(e.nodes[edge[1]])).norm();
-  }
-  contact_stiffness = elements.empty() ? 0 : 10 * material.youngs_modulus * edges / (6.0 * static_cast<double>(elements.size()));
+  finish_elements();
 }
 
 Simulator::Simulator(const TetMesh& mesh, const Material& material, std::span<const double> volume_fraction)
@@ -77,6 +85,13 @@ Simulator::Simulator(const TetMesh& mesh, const Material& material, std::span<co
   s.constraint.assign(static_cast<std::size_t>(mesh.num_nodes()), -1);
   s.target = Points::Zero(mesh.num_nodes(), 3);
   s.build(mesh, volume_fraction);
+  // The default contact stiffness follows the mesh the simulator was made with; cuts, which only
+  // copy its tets, keep it.
+  double edges = 0;
+  for (const SimulatorState::Element& e : s.elements) {
+    for (const auto& edge : kTetEdges) edges += (mesh.rest().row(e.nodes[edge[0]]) - mesh.rest().row(e.nodes[edge[1]])).norm();
+  }
+  s.contact_stiffness = s.elements.empty() ? 0 : 10 * material.youngs_modulus * edges / (6.0 * static_cast<double>(s.elements.size()));
 }
 
 Simulator::Simulator(const Simulator& other) : state_(std::make_unique<SimulatorState>(*other.state_)) {}
@@ -173,34 +188,69 @@ Vec3 Simulator::position(const EmbeddedPoint& p) const {
   return y;
 }
 
-void Simulator::remesh(const TetMesh& mesh, std::span<const double> volume_fraction, Index first_new_node,
-                       std::span<const Index> new_node_source) {
-  SimulatorState& s = *state_;
-  if (first_new_node != num_nodes() || mesh.num_nodes() != first_new_node + static_cast<Index>(new_node_source.size())) {
-    throw Error(ErrorKind::kInvalidArgument, "remesh: the node counts do not match the cut report");
-  }
+void SimulatorState::carry_new_nodes(Index first_new_node, std::span<const Index> new_node_source) {
+  if (first_new_node != num_nodes()) throw Error(ErrorKind::kInvalidArgument, "remesh: the node counts do not match the cut report");
   for (Index i = 0; i < static_cast<Index>(new_node_source.size()); ++i) {
     const Index source = new_node_source[i];
     if (source < 0 || source >= first_new_node + i) throw Error(ErrorKind::kInvalidArgument, "remesh: a node's source does not exist");
+  }
+  const Index total = first_new_node + static_cast<Index>(new_node_source.size());
+  x.conservativeResize(total, 3);
+  v.conservativeResize(total, 3);
+  target.conservativeResize(total, 3);
+  for (Index i = 0; i < static_cast<Index>(new_node_source.size()); ++i) {
+    const Index source = new_node_source[i];
+    x.row(first_new_node + i) = x.row(source);
+    v.row(first_new_node + i) = v.row(source);
+    target.row(first_new_node + i) = target.row(source);
+    constraint.push_back(constraint[source]);
+  }
+  // Springs and contact points name tets and barycentric weights that a cut may change.
+  contact_points.clear();
+  springs.clear();
+}
+
+void Simulator::remesh(const TetMesh& mesh, std::span<const double> volume_fraction, Index first_new_node,
+                       std::span<const Index> new_node_source) {
+  SimulatorState& s = *state_;
+  if (mesh.num_nodes() != first_new_node + static_cast<Index>(new_node_source.size())) {
+    throw Error(ErrorKind::kInvalidArgument, "remesh: the node counts do not match the cut report");
   }
   if (!volume_fraction.empty() && static_cast<Index>(volume_fraction.size()) != mesh.num_tets()) {
     throw Error(ErrorKind::kInvalidArgument, "remesh: " + std::to_string(volume_fraction.size()) + " volume fractions for " +
                                                  std::to_string(mesh.num_tets()) + " tets");
   }
-  const Index old = num_nodes();
-  s.x.conservativeResize(mesh.num_nodes(), 3);
-  s.v.conservativeResize(mesh.num_nodes(), 3);
-  s.target.conservativeResize(mesh.num_nodes(), 3);
-  for (Index i = 0; i < static_cast<Index>(new_node_source.size()); ++i) {
-    const Index source = new_node_source[i];
-    s.x.row(old + i) = s.x.row(source);
-    s.v.row(old + i) = s.v.row(source);
-    s.target.row(old + i) = s.target.row(source);
-    s.constraint.push_back(s.constraint[source]);
-  }
-  s.contact_points.clear();
-  s.springs.clear();
+  s.carry_new_nodes(first_new_node, new_node_source);
   s.build(mesh, volume_fraction);
+}
+
+void Simulator::remesh(const Cutter& cutter, const CutBatchReport& batch) {
+  SimulatorState& s = *state_;
+  const Index old_tets = num_tets();
+  if (cutter.num_nodes() != batch.first_new_node + static_cast<Index>(batch.new_node_source.size()) ||
+      cutter.num_tets() != batch.first_new_tet + static_cast<Index>(batch.new_tet_source.size()) || batch.first_new_tet != old_tets) {
+    throw Error(ErrorKind::kInvalidArgument, "remesh: the cutter and its last batch report do not match this simulator's mesh");
+  }
+  s.carry_new_nodes(batch.first_new_node, batch.new_node_source);
+  // Elements to rebuild: every copy of a touched tet (its material fraction may have changed; new
+  // copies are among them) and every copy whose nodes changed (a split node can take copies of
+  // untouched neighbours along). The others keep their nodes, shape and fraction.
+  s.elements.resize(static_cast<std::size_t>(cutter.num_tets()));
+  const Points& rest = cutter.input().rest();
+  const auto& parent = cutter.node_parent();
+  const auto rebuild = [&](Index copy) {
+    std::array<Vec3, 4> corners;
+    const std::array<Index, 4>& nodes = cutter.tet_nodes()[copy];
+    for (int k = 0; k < 4; ++k) corners[k] = rest.row(parent[nodes[k]]).transpose();
+    s.set_element(copy, nodes, corners, std::min(cutter.material_fraction(copy), 1.0));
+  };
+  for (const Index t : batch.touched) {
+    for (const Index copy : cutter.copies_of(t)) rebuild(copy);
+  }
+  for (const Index copy : batch.changed_tets) rebuild(copy);
+  s.finish_elements();
+  // A new copy deforms as its source: its SVD starts from there.
+  for (std::size_t i = 0; i < batch.new_tet_source.size(); ++i) s.element_v[old_tets + i] = s.element_v[batch.new_tet_source[i]];
 }
 
 void Simulator::set_positions(const Points& x) {

@@ -68,8 +68,17 @@ struct SimulatorState {
                                         at.row(e.nodes[2]).transpose(), at.row(e.nodes[3]).transpose());
   }
 
-  /// Rebuilds elements, masses and colours from a mesh (constructor and remesh).
+  /// Rebuilds elements, masses and colours from a mesh (constructor and remesh). O(tets).
   void build(const TetMesh& mesh, std::span<const double> volume_fraction);
+  /// Element t from its nodes, their rest positions and its material fraction (checked, floored
+  /// at kMinVolumeFraction).
+  void set_element(Index t, const std::array<Index, 4>& nodes, const std::array<Vec3, 4>& rest, double fraction);
+  /// After elements changed: masses, warm starts for new elements, colours; the structure is
+  /// marked stale. O(tets).
+  void finish_elements();
+  /// Nodes split by a cut start as their sources (position, velocity, constraint); springs and
+  /// contact points are dropped.
+  void carry_new_nodes(Index first_new_node, std::span<const Index> new_node_source);
   /// Greedy colouring of the elements. O(tets) while 64 colours suffice (a node in at most about
   /// 60 tets), O(sum of squared node degrees) beyond.
   void assign_colors();

@@ -123,6 +123,19 @@ Summary cut_and_check(const TetMesh& mesh, const std::vector<Triangle>& soup, in
   }
   const CutResult r = cutter.result();
   EXPECT_EQ(testing::check_cut_invariants(mesh, r), "");
+  // What a simulator reads after a batch, copy by copy, is what the result gives (the same bits).
+  const std::vector<double> fractions = r.mesh.material_fractions();
+  std::vector<Index> listed(fractions.size(), 0);
+  for (Index t = 0; t < mesh.num_tets(); ++t) {
+    for (const Index c : cutter.copies_of(t)) {
+      EXPECT_EQ(r.mesh.tet_parent[c], t);
+      ++listed[c];
+    }
+  }
+  for (std::size_t c = 0; c < fractions.size(); ++c) {
+    EXPECT_EQ(cutter.material_fraction(static_cast<Index>(c)), fractions[c]) << "copy " << c;
+    EXPECT_EQ(listed[c], 1) << "copy " << c;
+  }
   return {r.mesh.num_pieces(), r.mesh.mesh.num_tets(), r.mesh.mesh.num_nodes(), r.mesh.piece_volumes,
           measure_surface(r.surface.surface).area};
 }
