@@ -5,6 +5,8 @@
 
 #include "sim/simulator_state.hpp"
 
+#include "sim/element_batch.hpp"
+
 #include <bit>
 #include <cstdint>
 
@@ -135,32 +137,90 @@ double SimulatorState::elastic_gradient(const Points& at, std::vector<double>* g
   });
 }
 
-double SimulatorState::assemble_hessian(const Points& at, std::vector<double>* gradient) {
-  hessian.set_zero();
-  return by_color(color_start, color_elements, &partial, [&](Index i) {
-    const Element& e = elements[i];
-    Mat3 P;
-    detail::HessianFactor q;
-    const double psi = detail::element_hessian_factor(material.model, parameters, detail::deformation_gradient(e.weights, at.data(), e.nodes),
-                                                      e.weights, e.volume, &element_v[i], &P, &q);
-    scatter(e.nodes, detail::element_gradient(e.weights, e.volume, P), gradient->data());
-    // The 10 distinct blocks of Q Q^T; each off-diagonal one also goes, transposed, to its mirror.
-    const std::array<Index, 16>& slots = element_slots[i];
-    double block[9];
-    for (int a = 0; a < 4; ++a) {
-      for (int b = a; b < 4; ++b) {
-        detail::factor_block(q, a, b, block);
-        double* upper = hessian.block(slots[4 * a + b]);
-        for (int k = 0; k < 9; ++k) upper[k] += block[k];
-        if (b == a) continue;
-        double* lower = hessian.block(slots[4 * b + a]);
-        for (int r = 0; r < 3; ++r) {
-          for (int c = 0; c < 3; ++c) lower[3 * c + r] += block[3 * r + c];
-        }
+namespace {
+
+// Adds a tet's 10 distinct Hessian blocks (row-major, in LaneBatch order) into the pattern; each
+// off-diagonal block also goes, transposed, to its mirror.
+void scatter_blocks(const std::array<Index, 16>& slots, const double (&blocks)[10][9], detail::BlockSparseMatrix* hessian) {
+  int b = 0;
+  for (int r = 0; r < 4; ++r) {
+    for (int c = r; c < 4; ++c, ++b) {
+      const double* block = blocks[b];
+      double* upper = hessian->block(slots[4 * r + c]);
+      for (int k = 0; k < 9; ++k) upper[k] += block[k];
+      if (c == r) continue;
+      double* lower = hessian->block(slots[4 * c + r]);
+      for (int y = 0; y < 3; ++y) {
+        for (int z = 0; z < 3; ++z) lower[3 * z + y] += block[3 * y + z];
       }
     }
-    return e.volume * psi;
-  });
+  }
+}
+
+}  // namespace
+
+double SimulatorState::assemble_hessian(const Points& at, std::vector<double>* gradient) {
+  hessian.set_zero();
+  detail::LaneMaterial lane_material;
+  lane_material.corotated = material.model == Model::kCorotated;
+  lane_material.mu = parameters.mu;
+  lane_material.lambda = parameters.lambda;
+  lane_material.svd_tolerance = lane_material.corotated ? detail::kSvdExact : detail::kSvdForHessian;
+  lane_material.rotation_fold = detail::kRotationFold;
+  const bool lanes = detail::element_lanes_available();
+  double total = 0;
+  for (std::size_t c = 0; c + 1 < color_start.size(); ++c) {
+    const Index first = color_start[c], count = color_start[c + 1] - first;
+    total += detail::sum_chunks(count, kElementChunk, &partial, [&](Index begin, Index end) {
+      double energy = 0;
+      detail::LaneBatch batch;
+      // Elements kLaneBatch at a time (the last group of a chunk may be short).
+      for (Index i = begin; i < end; i += detail::kLaneBatch) {
+        const int group = static_cast<int>(std::min<Index>(detail::kLaneBatch, end - i));
+        for (int lane = 0; lane < group; ++lane) {
+          const Index e = color_elements[first + i + lane];
+          const Element& el = elements[e];
+          const Mat3 F = detail::deformation_gradient(el.weights, at.data(), el.nodes);
+          for (int r = 0; r < 3; ++r) {
+            for (int k = 0; k < 3; ++k) {
+              batch.F[lane][3 * r + k] = F(r, k);
+              batch.V[lane][3 * r + k] = element_v[e](r, k);
+            }
+          }
+          for (int a = 0; a < 4; ++a) {
+            for (int k = 0; k < 3; ++k) batch.weights[lane][3 * a + k] = el.weights(a, k);
+          }
+          batch.volume[lane] = el.volume;
+          batch.fallback[lane] = true;
+        }
+        if (lanes) detail::element_hessian_lanes(lane_material, &batch, group);
+        for (int lane = 0; lane < group; ++lane) {
+          const Index e = color_elements[first + i + lane];
+          const Element& el = elements[e];
+          if (batch.fallback[lane]) {
+            // The scalar kernel: no lane kernel here, or a lane it cannot take.
+            Mat3 F, P;
+            for (int k = 0; k < 9; ++k) F(k / 3, k % 3) = batch.F[lane][k];
+            detail::HessianFactor q;
+            batch.energy[lane] = detail::element_hessian_factor(material.model, parameters, F, el.weights, el.volume, &element_v[e], &P, &q);
+            const detail::Vec12 g = detail::element_gradient(el.weights, el.volume, P);
+            for (int k = 0; k < 12; ++k) batch.gradient[lane][k] = g[k];
+            int b = 0;
+            for (int r = 0; r < 4; ++r) {
+              for (int col = r; col < 4; ++col) detail::factor_block(q, r, col, batch.blocks[lane][b++]);
+            }
+          } else {
+            for (int k = 0; k < 9; ++k) element_v[e](k / 3, k % 3) = batch.V[lane][k];
+          }
+          energy += el.volume * batch.energy[lane];
+          scatter(el.nodes, Eigen::Map<const detail::Vec12>(batch.gradient[lane]), gradient->data());
+          scatter_blocks(element_slots[e], batch.blocks[lane], &hessian);
+        }
+      }
+      return energy;
+    });
+  }
+  return total;
 }
 
 }  // namespace tetcut::sim

@@ -6,12 +6,6 @@
 namespace tetcut::sim::detail {
 namespace {
 
-// Corotated's twist eigenvalue has 4 mu / (sigma_i + sigma_j): where the two singular values
-// nearly cancel (an element inverted through an edge), the polar rotation is not differentiable
-// and the term is unbounded. Within this distance of that fold the twist is given no stiffness,
-// as a projection would clamp the large negative value to.
-constexpr double kRotationFold = 1e-8;
-
 // Stable Neo-Hookean's rest-stable offset: P(I) = 0.
 double snh_alpha(const Lame& p) { return 1 + 0.75 * p.mu / p.lambda; }
 

@@ -28,6 +28,12 @@ using Mat12 = Eigen::Matrix<double, 12, 12>;
 /// dF/dx of a tet: F = sum_a x_a w_a^T, row a is w_a.
 using ShapeWeights = Eigen::Matrix<double, 4, 3>;
 
+/// Corotated's twist eigenvalue has 4 mu / (sigma_i + sigma_j): where the two singular values
+/// nearly cancel (an element inverted through an edge), the polar rotation is not differentiable
+/// and the term is unbounded. Within this distance of that fold the twist is given no stiffness,
+/// as a projection would clamp the large negative value to.
+inline constexpr double kRotationFold = 1e-8;
+
 /// dP/dF at F, as its eigensystem in the frame of `svd` (F's rotation-variant SVD).
 struct StressEigensystem {
   Vec3 twist, flip;  ///< eigenvalue of the twist and flip about axis k (see above)

@@ -84,11 +84,12 @@ Svd3 svd3(const Mat3& F, double tolerance, const Mat3* v_guess) {
     for (int p = 0; p < 2; ++p) {
       for (int q = p + 1; q < 3; ++q) {
         const double alpha = B.col(p).squaredNorm(), beta = B.col(q).squaredNorm(), gamma = B.col(p).dot(B.col(q));
-        if (!(std::abs(gamma) > tolerance * std::sqrt(alpha * beta))) continue;
+        if (!(gamma * gamma > tolerance * tolerance * alpha * beta)) continue;
         rotated = true;
-        // The rotation making columns p and q orthogonal: t = tan(angle), the smaller root.
-        const double zeta = (beta - alpha) / (2 * gamma);
-        const double t = (zeta >= 0 ? 1.0 : -1.0) / (std::abs(zeta) + std::sqrt(1 + zeta * zeta));
+        // The rotation making columns p and q orthogonal: t = tan(angle), the root of
+        // t^2 gamma + t (beta - alpha) - gamma = 0 of smaller size (|angle| <= pi/4).
+        const double d = beta - alpha;
+        const double t = 2 * gamma * (d >= 0 ? 1.0 : -1.0) / (std::abs(d) + std::sqrt(d * d + 4 * gamma * gamma));
         const double c = 1 / std::sqrt(1 + t * t), s = t * c;
         for (Mat3* m : {&B, &V}) {
           const Vec3 mp = m->col(p), mq = m->col(q);

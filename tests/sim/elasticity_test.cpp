@@ -8,8 +8,10 @@
 #include <tetcut/sim.hpp>
 
 #include "sim/elasticity.hpp"
+#include "sim/element_batch.hpp"
 #include "sim/svd3.hpp"
 
+#include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 
 #include <random>
@@ -218,6 +220,90 @@ TEST_P(Eigensystems, WarmStartedHessiansMatchColdOnes) {
     detail::element_hessian(GetParam(), p, tet.F(x), tet.w, tet.volume, &V, &P, &warm);
     detail::element_hessian(GetParam(), p, tet.F(x), tet.w, tet.volume, &cold_v, &P, &cold);
     EXPECT_LT((warm - cold).norm(), 1e-7 * cold.norm()) << "t = " << t;
+  }
+}
+
+TEST_P(Eigensystems, LaneKernelGivesTheScalarKernelsResults) {
+  // Four elements at a time, as assembly runs them: generic ones, and lanes the fast path must
+  // hand back (zero F, rank one, an indefinite scaling block under strong compression).
+  const Lame p = model_parameters(GetParam(), lame_parameters(1e5, 0.3));
+  const TestTet tet;
+  std::vector<Mat3> cases = sweep_to_inversion();
+  const Mat3 R = Eigen::AngleAxisd(0.7, Vec3(1, 0, 1).normalized()).toRotationMatrix();
+  cases.push_back(Mat3::Zero());
+  cases.push_back(R * Vec3(1.5, 0, 0).asDiagonal());
+  cases.push_back(R * Vec3(0.2, 0.2, 0.2).asDiagonal());
+  cases.push_back(R * Vec3(0.05, 0.9, -0.4).asDiagonal());
+  detail::LaneMaterial material;
+  material.corotated = GetParam() == Model::kCorotated;
+  material.mu = p.mu;
+  material.lambda = p.lambda;
+  material.svd_tolerance = material.corotated ? detail::kSvdExact : detail::kSvdForHessian;
+  material.rotation_fold = detail::kRotationFold;
+  int handed_back = 0;
+  for (std::size_t first = 0; first < cases.size(); first += detail::kLaneBatch) {
+    const int count = static_cast<int>(std::min<std::size_t>(detail::kLaneBatch, cases.size() - first));
+    detail::LaneBatch batch;
+    for (int lane = 0; lane < count; ++lane) {
+      for (int k = 0; k < 9; ++k) {
+        batch.F[lane][k] = cases[first + lane](k / 3, k % 3);
+        batch.V[lane][k] = k % 4 == 0 ? 1.0 : 0.0;
+      }
+      for (int k = 0; k < 12; ++k) batch.weights[lane][k] = tet.w(k / 3, k % 3);
+      batch.volume[lane] = tet.volume;
+    }
+    detail::element_hessian_lanes(material, &batch, count);
+    for (int lane = 0; lane < count; ++lane) {
+      const Mat3& F = cases[first + lane];
+      // Where the fast path cannot go: a zero or rank-one F, or a scaling block that is not
+      // positive definite (its Cholesky factorisation fails).
+      const detail::Svd3 svd = detail::svd3(F, detail::kSvdExact);
+      const Mat3 scaling = detail::stress_eigensystem(GetParam(), p, svd).scaling;
+      const bool expected_back = !(svd.sigma[1] > 1e-12 * svd.sigma[0]) || scaling.llt().info() != Eigen::Success;
+      if (!detail::element_lanes_available()) {
+        EXPECT_TRUE(batch.fallback[lane]);  // built or running without the kernel: all to scalar
+        continue;
+      }
+      EXPECT_EQ(batch.fallback[lane], expected_back) << F;
+      if (batch.fallback[lane]) {
+        ++handed_back;
+        continue;
+      }
+      ASSERT_TRUE(detail::element_lanes_available()) << "a lane was computed without the kernel";
+      Mat3 V = Mat3::Identity(), P;
+      detail::HessianFactor q;
+      const double psi = detail::element_hessian_factor(GetParam(), p, F, tet.w, tet.volume, &V, &P, &q);
+      EXPECT_NEAR(batch.energy[lane], psi, 1e-12 * (std::abs(psi) + p.mu)) << F;
+      const Vec12 g = detail::element_gradient(tet.w, tet.volume, P);
+      for (int k = 0; k < 12; ++k) EXPECT_NEAR(batch.gradient[lane][k], g[k], 1e-10 * (g.norm() + p.mu * tet.volume));
+      double scale = 0, worst = 0;
+      int b = 0;
+      for (int r = 0; r < 4; ++r) {
+        for (int c = r; c < 4; ++c, ++b) {
+          double expected[9];
+          detail::factor_block(q, r, c, expected);
+          for (int k = 0; k < 9; ++k) {
+            scale = std::max(scale, std::abs(expected[k]));
+            worst = std::max(worst, std::abs(expected[k] - batch.blocks[lane][b][k]));
+          }
+        }
+      }
+      EXPECT_LT(worst, 1e-7 * scale) << F;
+      // The warm start handed back: a rotation that diagonalises F^T F (up to the tolerance; the
+      // signs of a pair of columns are free, as in any rotation-variant SVD).
+      Mat3 lane_v;
+      for (int k = 0; k < 9; ++k) lane_v(k / 3, k % 3) = batch.V[lane][k];
+      EXPECT_LT((lane_v.transpose() * lane_v - Mat3::Identity()).norm(), 1e-13);
+      EXPECT_NEAR(lane_v.determinant(), 1, 1e-13);
+      Mat3 d = lane_v.transpose() * F.transpose() * F * lane_v;
+      const double diagonal = d.diagonal().norm();
+      d.diagonal().setZero();
+      EXPECT_LT(d.norm(), 1e-6 * diagonal) << F;
+    }
+  }
+  // The zero and the rank-one matrix at least went to the scalar kernel.
+  if (detail::element_lanes_available()) {
+    EXPECT_GE(handed_back, 2);
   }
 }
 
