@@ -36,14 +36,33 @@ void SimulatorState::set_element(Index t, const std::array<Index, 4>& nodes, con
   e.volume = dm.determinant() / 6 * std::clamp(fraction, kMinVolumeFraction, 1.0);
 }
 
-void SimulatorState::finish_elements() {
+void SimulatorState::finish_elements(Index first_new, std::span<const Index> new_source) {
   mass = Eigen::VectorXd::Zero(num_nodes());
   for (const Element& e : elements) {
     for (const Index n : e.nodes) mass[n] += material.density * e.volume / 4;
   }
-  // A new element's SVD starts from scratch unless the caller knows better (a cut copy starts
-  // from its source's).
-  element_v.resize(elements.size(), Mat3::Identity());
+  // Warm starts follow their elements to the new positions; a new copy starts from its
+  // source's (it deforms as its source), any other new element from scratch.
+  const Index count = static_cast<Index>(elements.size());
+  std::vector<Mat3> carried(static_cast<std::size_t>(count), Mat3::Identity());
+  const auto old_v = [&](Index id) -> const Mat3* {
+    if (id < static_cast<Index>(element_position.size())) return &ordered_v[element_position[id]];
+    const Index i = id - first_new;
+    if (i >= 0 && i < static_cast<Index>(new_source.size()) && new_source[i] < static_cast<Index>(element_position.size())) {
+      return &ordered_v[element_position[new_source[i]]];
+    }
+    return nullptr;
+  };
+  for (Index pos = 0; pos < count; ++pos) {
+    if (const Mat3* from = old_v(element_order[pos])) carried[pos] = *from;
+  }
+  ordered_v.swap(carried);
+  element_position.assign(static_cast<std::size_t>(count), 0);
+  ordered.resize(static_cast<std::size_t>(count));
+  for (Index pos = 0; pos < count; ++pos) {
+    element_position[element_order[pos]] = pos;
+    ordered[pos].element = elements[element_order[pos]];
+  }
   assign_colors();
   structure_stale = true;
 }
@@ -66,6 +85,7 @@ void SimulatorState::build(const TetMesh& mesh, std::span<const double> volume_f
   }
   const Vec3 extent = rest.colwise().maxCoeff() - rest.colwise().minCoeff();
   size = std::max(extent.norm(), std::numeric_limits<double>::min());
+  order_elements(rest);
   finish_elements();
 }
 
@@ -248,9 +268,8 @@ void Simulator::remesh(const Cutter& cutter, const CutBatchReport& batch) {
     for (const Index copy : cutter.copies_of(t)) rebuild(copy);
   }
   for (const Index copy : batch.changed_tets) rebuild(copy);
-  s.finish_elements();
-  // A new copy deforms as its source: its SVD starts from there.
-  for (std::size_t i = 0; i < batch.new_tet_source.size(); ++i) s.element_v[old_tets + i] = s.element_v[batch.new_tet_source[i]];
+  s.order_new_copies(old_tets, batch.new_tet_source);
+  s.finish_elements(old_tets, batch.new_tet_source);
 }
 
 void Simulator::set_positions(const Points& x) {

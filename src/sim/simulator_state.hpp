@@ -27,10 +27,7 @@ struct SimulatorState {
 
   Material material;
   Lame parameters;
-  std::vector<Element> elements;
-  /// Each element's V from its last SVD: the next one starts there (the deformation changes
-  /// little between Newton iterations and steps, so Jacobi needs fewer sweeps).
-  std::vector<Mat3> element_v;
+  std::vector<Element> elements;  // by tet id
   std::vector<EmbeddedPoint> contact_points;
   std::vector<Obstacle> obstacles;
   double contact_stiffness = 0;
@@ -43,15 +40,29 @@ struct SimulatorState {
   std::vector<std::int8_t> constraint;
   Points target;
 
-  // The elements grouped by colour: no two of a colour share a node, so a colour scatters into
-  // node vectors and the matrix on all threads at once, and every entry receives its terms in
-  // colour order whatever the threads. Rebuilt with the elements.
-  std::vector<Index> color_start, color_elements;
+  // The elements in a spatial order (Morton order of their rest centroids; a cut's new copies
+  // follow their sources), cut into clusters of kCluster; cluster k is element_order[k kCluster
+  // ..]. The clusters grouped by colour: no two of a colour share a node, so a colour's clusters
+  // scatter into node vectors and the matrix on all threads at once, every entry receives its
+  // terms in a fixed order whatever the threads, and a cluster's writes stay close in memory.
+  static constexpr Index kCluster = 128;
+  std::vector<Index> element_order;     // position -> tet id
+  std::vector<Index> element_position;  // tet id -> position
+  std::vector<Index> color_start, color_clusters;
+  // What the element loops read and write, stored by position so that they stream through memory
+  // (random access to per-element data was half the cost of assembly at 100k tets): the element,
+  // its 16 slots in the pattern, and its V from its last SVD (the next SVD starts there; the
+  // deformation changes little between Newton iterations and steps, so Jacobi needs fewer sweeps).
+  struct OrderedElement {
+    Element element;
+    std::array<Index, 16> slots;
+  };
+  std::vector<OrderedElement> ordered;
+  std::vector<Mat3> ordered_v;
   // The Newton system's structure: the block pattern of elements and springs and each element's
   // 16 slots in it. Rebuilt at the next step after the mesh or the springs changed.
   bool structure_stale = true;
   detail::BlockSparseMatrix hessian;
-  std::vector<std::array<Index, 16>> element_slots;
 
   // Scratch reused from step to step, so that a step allocates nothing once sizes settle (and
   // why a Simulator, even through const calls, is for one thread at a time).
@@ -73,14 +84,19 @@ struct SimulatorState {
   /// Element t from its nodes, their rest positions and its material fraction (checked, floored
   /// at kMinVolumeFraction).
   void set_element(Index t, const std::array<Index, 4>& nodes, const std::array<Vec3, 4>& rest, double fraction);
-  /// After elements changed: masses, warm starts for new elements, colours; the structure is
-  /// marked stale. O(tets).
-  void finish_elements();
+  /// After elements or their order changed: masses, the ordered copy, warm starts carried to
+  /// their new positions (a new copy i from `new_source[i]`'s, when given; the identity
+  /// otherwise), colours; the structure is marked stale. O(tets).
+  void finish_elements(Index first_new = 0, std::span<const Index> new_source = {});
   /// Nodes split by a cut start as their sources (position, velocity, constraint); springs and
   /// contact points are dropped.
   void carry_new_nodes(Index first_new_node, std::span<const Index> new_node_source);
-  /// Greedy colouring of the elements. O(tets) while 64 colours suffice (a node in at most about
-  /// 60 tets), O(sum of squared node degrees) beyond.
+  /// The spatial order from scratch (construction, and remesh from a whole mesh). O(T log T).
+  void order_elements(const Points& rest);
+  /// After a cut: new copies first_new .. (source[i] each) placed right after their sources. O(T).
+  void order_new_copies(Index first_new, std::span<const Index> source);
+  /// Greedy colouring of the clusters. O(tets) while 64 colours suffice, O(sum over nodes of
+  /// their clusters squared) beyond (a node in very many copies).
   void assign_colors();
   /// Rebuilds the pattern, slots and colours if stale. O(tets), parallel over nodes.
   void refresh_structure();
