@@ -9,9 +9,7 @@
 #include "sim/element_batch.hpp"
 
 #include <algorithm>
-#include <bit>
 #include <cstdint>
-#include <limits>
 
 namespace tetcut::sim {
 namespace {
@@ -30,139 +28,6 @@ void scatter(const std::array<Index, 4>& nodes, const detail::Vec12& g, double* 
 }
 
 }  // namespace
-
-void SimulatorState::order_elements(const Points& rest) {
-  // Morton order of the rest centroids: 21 bits per axis over the bounding box, interleaved.
-  const Index count = static_cast<Index>(elements.size());
-  Vec3 low = Vec3::Constant(std::numeric_limits<double>::infinity()), high = -low;
-  for (Index node = 0; node < rest.rows(); ++node) {
-    low = low.cwiseMin(rest.row(node).transpose());
-    high = high.cwiseMax(rest.row(node).transpose());
-  }
-  const Vec3 extent = (high - low).cwiseMax(std::numeric_limits<double>::min());
-  const auto spread = [](std::uint64_t bits) {  // the 21 low bits to every third bit
-    bits &= 0x1fffff;
-    bits = (bits | bits << 32) & 0x1f00000000ffffULL;
-    bits = (bits | bits << 16) & 0x1f0000ff0000ffULL;
-    bits = (bits | bits << 8) & 0x100f00f00f00f00fULL;
-    bits = (bits | bits << 4) & 0x10c30c30c30c30c3ULL;
-    bits = (bits | bits << 2) & 0x1249249249249249ULL;
-    return bits;
-  };
-  std::vector<std::pair<std::uint64_t, Index>> keys(static_cast<std::size_t>(count));
-  for (Index e = 0; e < count; ++e) {
-    Vec3 centroid = Vec3::Zero();
-    for (const Index node : elements[e].nodes) centroid += rest.row(node).transpose() / 4;
-    const Vec3 unit = ((centroid - low).cwiseQuotient(extent)).cwiseMax(0.0).cwiseMin(1.0);
-    std::uint64_t key = 0;
-    for (int k = 0; k < 3; ++k) key |= spread(static_cast<std::uint64_t>(unit[k] * 2097151.0)) << k;
-    keys[e] = {key, e};
-  }
-  std::sort(keys.begin(), keys.end());
-  element_order.resize(static_cast<std::size_t>(count));
-  for (Index i = 0; i < count; ++i) element_order[i] = keys[i].second;
-}
-
-void SimulatorState::order_new_copies(Index first_new, std::span<const Index> source) {
-  // Each new copy right after its source: a copy is where its source is.
-  std::vector<Index> copies_start(elements.size() + 1, 0), copies(source.size());
-  for (const Index from : source) ++copies_start[from + 1];
-  for (std::size_t e = 0; e < elements.size(); ++e) copies_start[e + 1] += copies_start[e];
-  std::vector<Index> next(copies_start.begin(), copies_start.end() - 1);
-  for (Index i = 0; i < static_cast<Index>(source.size()); ++i) copies[next[source[i]]++] = first_new + i;
-  std::vector<Index> order;
-  order.reserve(elements.size());
-  // A new copy may itself be a source (split again in the same batch): follow the chain.
-  const auto place = [&](Index e, const auto& self) -> void {
-    order.push_back(e);
-    for (Index k = copies_start[e]; k < copies_start[e + 1]; ++k) self(copies[k], self);
-  };
-  for (const Index e : element_order) place(e, place);
-  element_order.swap(order);
-}
-
-void SimulatorState::assign_colors() {
-  const Index n = num_nodes(), count = static_cast<Index>(elements.size());
-  const Index clusters = (count + kCluster - 1) / kCluster;
-  // The nodes of the elements of cluster k (positions k kCluster ..).
-  const auto cluster_elements = [&](Index k) {
-    return std::span<const OrderedElement>(ordered.data() + k * kCluster, static_cast<std::size_t>(std::min(kCluster, count - k * kCluster)));
-  };
-  std::vector<std::uint64_t> used(static_cast<std::size_t>(n), 0);
-  std::vector<Index> color(static_cast<std::size_t>(clusters));
-  // Past 64 colours: the colours of the clusters already coloured around each node, found
-  // through the node-to-cluster incidence (built only if needed: a node in very many copies).
-  std::vector<Index> around_start, around, forbidden;
-  Index colors = 0;
-  for (Index k = 0; k < clusters; ++k) {
-    std::uint64_t mask = 0;
-    for (const OrderedElement& e : cluster_elements(k)) {
-      for (const Index node : e.element.nodes) mask |= used[node];
-    }
-    Index c;
-    if (~mask != 0) {
-      c = std::countr_zero(~mask);
-    } else {
-      if (around_start.empty()) {
-        around_start.assign(static_cast<std::size_t>(n) + 1, 0);
-        for (Index j = 0; j < clusters; ++j) {
-          for (const OrderedElement& e : cluster_elements(j)) {
-            for (const Index node : e.element.nodes) ++around_start[node + 1];
-          }
-        }
-        for (Index node = 0; node < n; ++node) around_start[node + 1] += around_start[node];
-        around.resize(static_cast<std::size_t>(around_start.back()));
-        std::vector<Index> next(around_start.begin(), around_start.end() - 1);
-        for (Index j = 0; j < clusters; ++j) {
-          for (const OrderedElement& e : cluster_elements(j)) {
-            for (const Index node : e.element.nodes) around[next[node]++] = j;
-          }
-        }
-      }
-      forbidden.assign(static_cast<std::size_t>(colors) + 1, 0);
-      for (const OrderedElement& e : cluster_elements(k)) {
-        for (const Index node : e.element.nodes) {
-          for (Index i = around_start[node]; i < around_start[node + 1]; ++i) {
-            if (around[i] < k) forbidden[color[around[i]]] = 1;
-          }
-        }
-      }
-      c = 64;
-      while (forbidden[c]) ++c;
-    }
-    color[k] = c;
-    colors = std::max(colors, c + 1);
-    if (c < 64) {
-      for (const OrderedElement& e : cluster_elements(k)) {
-        for (const Index node : e.element.nodes) used[node] |= std::uint64_t{1} << c;
-      }
-    }
-  }
-  // Clusters grouped by colour, ascending within each.
-  color_start.assign(static_cast<std::size_t>(colors) + 1, 0);
-  for (const Index c : color) ++color_start[c + 1];
-  for (Index c = 0; c < colors; ++c) color_start[c + 1] += color_start[c];
-  color_clusters.resize(static_cast<std::size_t>(clusters));
-  std::vector<Index> next(color_start.begin(), color_start.end() - 1);
-  for (Index k = 0; k < clusters; ++k) color_clusters[next[color[k]]++] = k;
-}
-
-void SimulatorState::refresh_structure() {
-  if (!structure_stale) return;
-  std::vector<std::array<Index, 4>> tets(ordered.size());
-  for (std::size_t pos = 0; pos < ordered.size(); ++pos) tets[pos] = ordered[pos].element.nodes;
-  std::vector<std::array<Index, 8>> pairs(springs.size());
-  for (std::size_t i = 0; i < springs.size(); ++i) {
-    for (int k = 0; k < 4; ++k) {
-      pairs[i][k] = elements[springs[i].p.tet].nodes[k];
-      pairs[i][k + 4] = elements[springs[i].q.tet].nodes[k];
-    }
-  }
-  std::vector<std::array<Index, 16>> slots;
-  hessian.build(num_nodes(), tets, pairs, &slots);
-  for (std::size_t pos = 0; pos < ordered.size(); ++pos) ordered[pos].slots = slots[pos];
-  structure_stale = false;
-}
 
 double SimulatorState::elastic_energy(const Points& at) const {
   return detail::sum_chunks(static_cast<Index>(elements.size()), kElementChunk, &partial, [&](Index begin, Index end) {

@@ -92,19 +92,55 @@ void BlockSparseMatrix::build(Index num_nodes, std::span<const std::array<Index,
     }
   });
   values_.assign(9 * columns_.size(), 0.0);
+  added_.assign(static_cast<std::size_t>(num_nodes), {});
+  added_columns_.clear();
+  added_values_.clear();
+}
+
+void BlockSparseMatrix::add_rows(Index count) {
+  for (Index i = 0; i < count; ++i) {
+    const Index r = num_rows();
+    added_.emplace_back();
+    diagonal_.push_back(-1);
+    diagonal_[r] = find_or_add(r, r);
+  }
+}
+
+Index BlockSparseMatrix::find_or_add(Index row, Index column) {
+  const Index found = slot(row, column);
+  if (found >= 0) return found;
+  const Index k = num_blocks();
+  added_columns_.push_back(column);
+  added_values_.resize(added_values_.size() + 9, 0.0);
+  added_[row].push_back(k);
+  return k;
 }
 
 Index BlockSparseMatrix::slot(Index row, Index column) const {
-  const auto begin = columns_.begin() + row_start_[row], end = columns_.begin() + row_start_[row + 1];
-  const auto found = std::lower_bound(begin, end, column);
-  return found != end && *found == column ? static_cast<Index>(found - columns_.begin()) : -1;
+  Index found = -1;
+  for_each_block(row, [&](Index k, Index c) {
+    if (c == column) found = k;
+  });
+  return found;
 }
 
-void BlockSparseMatrix::set_zero() { std::fill(values_.begin(), values_.end(), 0.0); }
+void BlockSparseMatrix::set_zero() {
+  std::fill(values_.begin(), values_.end(), 0.0);
+  std::fill(added_values_.begin(), added_values_.end(), 0.0);
+}
 
-double BlockSparseMatrix::multiply_rows(Index begin, Index end, const double* x, double* y, const std::uint8_t* free,
-                                        const double* values) const {
-  const double* v = values ? values : values_.data();
+void BlockSparseMatrix::add_scaled(const BlockSparseMatrix& other, double weight) {
+  for (std::size_t k = 0; k < values_.size(); ++k) values_[k] += weight * other.values_[k];
+  for (std::size_t k = 0; k < added_values_.size(); ++k) added_values_[k] += weight * other.added_values_[k];
+}
+
+double BlockSparseMatrix::multiply_rows(Index begin, Index end, const double* x, double* y, const std::uint8_t* free) const {
+  const auto add = [&](const double* b, const double* in, double* sums) {
+    sums[0] += b[0] * in[0] + b[1] * in[1] + b[2] * in[2];
+    sums[1] += b[3] * in[0] + b[4] * in[1] + b[5] * in[2];
+    sums[2] += b[6] * in[0] + b[7] * in[1] + b[8] * in[2];
+  };
+  const Index built = built_rows();
   double dot = 0;
   for (Index r = begin; r < end; ++r) {
     double* out = y + 3 * static_cast<std::size_t>(r);
@@ -112,19 +148,21 @@ double BlockSparseMatrix::multiply_rows(Index begin, Index end, const double* x,
       out[0] = out[1] = out[2] = 0;
       continue;
     }
-    double y0 = 0, y1 = 0, y2 = 0;
-    for (Index k = row_start_[r]; k < row_start_[r + 1]; ++k) {
-      const double* b = v + 9 * static_cast<std::size_t>(k);
-      const double* in = x + 3 * static_cast<std::size_t>(columns_[k]);
-      y0 += b[0] * in[0] + b[1] * in[1] + b[2] * in[2];
-      y1 += b[3] * in[0] + b[4] * in[1] + b[5] * in[2];
-      y2 += b[6] * in[0] + b[7] * in[1] + b[8] * in[2];
+    double sums[3] = {0, 0, 0};
+    if (r < built) {
+      for (Index k = row_start_[r]; k < row_start_[r + 1]; ++k) {
+        add(values_.data() + 9 * static_cast<std::size_t>(k), x + 3 * static_cast<std::size_t>(columns_[k]), sums);
+      }
     }
-    out[0] = y0;
-    out[1] = y1;
-    out[2] = y2;
+    for (const Index k : added_[r]) {
+      const std::size_t a = static_cast<std::size_t>(k - static_cast<Index>(columns_.size()));
+      add(added_values_.data() + 9 * a, x + 3 * static_cast<std::size_t>(added_columns_[a]), sums);
+    }
+    out[0] = sums[0];
+    out[1] = sums[1];
+    out[2] = sums[2];
     const double* own = x + 3 * static_cast<std::size_t>(r);
-    dot += own[0] * y0 + own[1] * y1 + own[2] * y2;
+    dot += own[0] * sums[0] + own[1] * sums[1] + own[2] * sums[2];
   }
   return dot;
 }

@@ -60,40 +60,61 @@ class BlockSparseMatrix {
   /// The pattern in which every two nodes of a tet, and every two of the `extra` groups (eight
   /// nodes, the two tets a spring joins), are coupled; the diagonal is always present. Fills
   /// `tet_slots` with the 16 slots of each tet: slot of (row node a, column node b) is
-  /// tet_slots[t][4 a + b]. O(sum over nodes of the tets around it), parallel over rows.
+  /// tet_slots[t][4 a + b]. Stored compactly (no room left in rows: at 100k tets a matrix a
+  /// third larger fell out of the cache and made each product three times slower). O(sum over
+  /// nodes of the tets around it), parallel over rows.
   void build(Index num_nodes, std::span<const std::array<Index, 4>> tets, std::span<const std::array<Index, 8>> extra,
              std::vector<std::array<Index, 16>>* tet_slots);
 
-  Index num_rows() const { return static_cast<Index>(row_start_.size()) - 1; }
-  Index num_blocks() const { return static_cast<Index>(columns_.size()); }
-  /// The slot of block (row, column), or -1 when it is not in the pattern. O(log row length).
+  /// Appends rows (new nodes) holding their diagonal block. No slot moves.
+  void add_rows(Index count);
+  /// The slot of block (row, column), added (zero) when missing: blocks added after a build go to
+  /// a small area of their own, so no slot moves. O(row length).
+  Index find_or_add(Index row, Index column);
+
+  Index num_rows() const { return static_cast<Index>(diagonal_.size()); }
+  /// Blocks in the pattern (a coupling a cut removed stays, as zeros, until the next build).
+  Index num_blocks() const { return static_cast<Index>(columns_.size() + added_columns_.size()); }
+  Index num_added_blocks() const { return static_cast<Index>(added_columns_.size()); }
+  /// The slot of block (row, column), or -1 when it is not in the pattern. O(row length).
   Index slot(Index row, Index column) const;
   Index diagonal_slot(Index row) const { return diagonal_[row]; }
-  /// Row `row`'s slots are row_begin(row) .. row_end(row) - 1, by ascending column.
-  Index row_begin(Index row) const { return row_start_[row]; }
-  Index row_end(Index row) const { return row_start_[row + 1]; }
-  Index column(Index slot) const { return columns_[slot]; }
+  /// Calls visit(slot, column) for each block of `row`: those of the build by ascending column,
+  /// then those added since.
+  template <typename Visit>
+  void for_each_block(Index row, Visit&& visit) const {
+    if (row < built_rows()) {
+      for (Index k = row_start_[row]; k < row_start_[row + 1]; ++k) visit(k, columns_[k]);
+    }
+    for (const Index k : added_[row]) visit(k, added_columns_[k - static_cast<Index>(columns_.size())]);
+  }
   /// Block `slot`, 9 values in row-major order.
-  double* block(Index slot) { return values_.data() + 9 * static_cast<std::size_t>(slot); }
-  const double* block(Index slot) const { return values_.data() + 9 * static_cast<std::size_t>(slot); }
+  double* block(Index slot) {
+    const auto built = static_cast<Index>(columns_.size());
+    return slot < built ? values_.data() + 9 * static_cast<std::size_t>(slot) : added_values_.data() + 9 * static_cast<std::size_t>(slot - built);
+  }
+  const double* block(Index slot) const { return const_cast<BlockSparseMatrix*>(this)->block(slot); }
   void set_zero();
-  /// All blocks' values, 9 per slot.
-  std::vector<double>& values() { return values_; }
-  const std::vector<double>& values() const { return values_; }
+  /// this += weight * other, for a matrix with the same pattern (a copy of this one).
+  void add_scaled(const BlockSparseMatrix& other, double weight);
 
   /// y = A x restricted to the nodes with free[n] != 0 (y is 0 at the others, and x is read as 0
   /// there). x and y hold 3 values per node.
   void multiply(const double* x, double* y, const std::uint8_t* free) const;
   /// Same for one chunk of rows, returning sum over those rows of x . (A x) (for CG's step).
-  /// `values` (default: this matrix's) may be another set of values over the same pattern.
-  double multiply_rows(Index begin, Index end, const double* x, double* y, const std::uint8_t* free,
-                       const double* values = nullptr) const;
+  double multiply_rows(Index begin, Index end, const double* x, double* y, const std::uint8_t* free) const;
 
  private:
+  Index built_rows() const { return static_cast<Index>(row_start_.size()) - 1; }
+  // The build: compressed rows.
   std::vector<Index> row_start_{0};
   std::vector<Index> columns_;
-  std::vector<Index> diagonal_;
   std::vector<double> values_;
+  // Blocks added since, by row; their slots follow the build's.
+  std::vector<std::vector<Index>> added_;
+  std::vector<Index> added_columns_;
+  std::vector<double> added_values_;
+  std::vector<Index> diagonal_;
 };
 
 struct ConjugateGradientOptions {

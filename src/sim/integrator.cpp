@@ -94,7 +94,7 @@ struct Potential {
   }
 
   // Rayleigh stiffness damping: (damping_weight / 2) u^T K u with u = at - start and K the
-  // stiffness at the start of the step (s.damping_values over the pattern).
+  // stiffness at the start of the step (s.damping, a copy of the pattern).
   double damping(const Points& at, std::vector<double>* g, bool hessian) const {
     if (!stiffness_damping) return 0;
     const Index n = s.num_nodes();
@@ -102,13 +102,10 @@ struct Potential {
     s.product.resize(3 * static_cast<std::size_t>(n));
     s.all.assign(static_cast<std::size_t>(n), 1);
     const double uKu = detail::sum_chunks(n, detail::kNodeChunk, &s.partial, [&](Index begin, Index end) {
-      return s.hessian.multiply_rows(begin, end, s.displacement.data(), s.product.data(), s.all.data(), s.damping_values.data());
+      return s.damping.multiply_rows(begin, end, s.displacement.data(), s.product.data(), s.all.data());
     });
     for (std::size_t k = 0; k < s.product.size(); ++k) (*g)[k] += damping_weight * s.product[k];
-    if (hessian) {
-      std::vector<double>& values = s.hessian.values();
-      for (std::size_t k = 0; k < values.size(); ++k) values[k] += damping_weight * s.damping_values[k];
-    }
+    if (hessian) s.hessian.add_scaled(s.damping, damping_weight);
     return 0.5 * damping_weight * uKu;
   }
 
@@ -141,14 +138,13 @@ bool solve_direct(const SimulatorState& s, std::vector<double>* d) {
   // Walk the pattern row by row.
   for (Index row = 0; row < n; ++row) {
     if (dof[row] < 0) continue;
-    for (Index k = a.row_begin(row); k < a.row_end(row); ++k) {
-      const Index column = a.column(k);
-      if (dof[column] < 0) continue;
+    a.for_each_block(row, [&](Index k, Index column) {
+      if (dof[column] < 0) return;
       const double* b = a.block(k);
       for (int i = 0; i < 3; ++i) {
         for (int j = 0; j < 3; ++j) triplets.emplace_back(3 * dof[row] + i, 3 * dof[column] + j, b[3 * i + j]);
       }
-    }
+    });
   }
   Eigen::SparseMatrix<double> matrix(3 * count, 3 * count);
   matrix.setFromTriplets(triplets.begin(), triplets.end());
@@ -211,7 +207,7 @@ StepReport Simulator::minimise(const StepOptions& options, bool inertia) {
   // Rayleigh stiffness damping uses the (projected) stiffness at the start of the step.
   if (inertia && s.material.stiffness_damping > 0) {
     s.assemble_hessian(s.start, &s.current_gradient);
-    s.damping_values = s.hessian.values();
+    s.damping = s.hessian;
     potential.stiffness_damping = true;
     potential.damping_weight = s.material.stiffness_damping / h;
   }

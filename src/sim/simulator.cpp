@@ -22,11 +22,11 @@ constexpr double kFractionRounding = 1e-9;
 
 }  // namespace
 
-void SimulatorState::set_element(Index t, const std::array<Index, 4>& nodes, const std::array<Vec3, 4>& rest, double fraction) {
+void SimulatorState::set_element(Index t, const std::array<Index, 4>& nodes, const std::array<Vec3, 4>& corners, double fraction) {
   Element& e = elements[t];
   e.nodes = nodes;
   Mat3 dm;
-  for (int k = 0; k < 3; ++k) dm.col(k) = rest[k + 1] - rest[0];
+  for (int k = 0; k < 3; ++k) dm.col(k) = corners[k + 1] - corners[0];
   const Mat3 inverse = dm.inverse();
   e.weights.bottomRows<3>() = inverse;
   e.weights.row(0) = -inverse.colwise().sum();
@@ -36,57 +36,27 @@ void SimulatorState::set_element(Index t, const std::array<Index, 4>& nodes, con
   e.volume = dm.determinant() / 6 * std::clamp(fraction, kMinVolumeFraction, 1.0);
 }
 
-void SimulatorState::finish_elements(Index first_new, std::span<const Index> new_source) {
-  mass = Eigen::VectorXd::Zero(num_nodes());
-  for (const Element& e : elements) {
-    for (const Index n : e.nodes) mass[n] += material.density * e.volume / 4;
-  }
-  // Warm starts follow their elements to the new positions; a new copy starts from its
-  // source's (it deforms as its source), any other new element from scratch.
-  const Index count = static_cast<Index>(elements.size());
-  std::vector<Mat3> carried(static_cast<std::size_t>(count), Mat3::Identity());
-  const auto old_v = [&](Index id) -> const Mat3* {
-    if (id < static_cast<Index>(element_position.size())) return &ordered_v[element_position[id]];
-    const Index i = id - first_new;
-    if (i >= 0 && i < static_cast<Index>(new_source.size()) && new_source[i] < static_cast<Index>(element_position.size())) {
-      return &ordered_v[element_position[new_source[i]]];
-    }
-    return nullptr;
-  };
-  for (Index pos = 0; pos < count; ++pos) {
-    if (const Mat3* from = old_v(element_order[pos])) carried[pos] = *from;
-  }
-  ordered_v.swap(carried);
-  element_position.assign(static_cast<std::size_t>(count), 0);
-  ordered.resize(static_cast<std::size_t>(count));
-  for (Index pos = 0; pos < count; ++pos) {
-    element_position[element_order[pos]] = pos;
-    ordered[pos].element = elements[element_order[pos]];
-  }
-  assign_colors();
-  structure_stale = true;
-}
-
 void SimulatorState::build(const TetMesh& mesh, std::span<const double> volume_fraction) {
   if (!volume_fraction.empty() && static_cast<Index>(volume_fraction.size()) != mesh.num_tets()) {
     throw Error(ErrorKind::kInvalidArgument, "volume fractions: " + std::to_string(volume_fraction.size()) +
                                                  " values for " + std::to_string(mesh.num_tets()) + " tets");
   }
-  const Points& rest = mesh.rest();
+  const Points& rest_positions = mesh.rest();
   elements.resize(static_cast<std::size_t>(mesh.num_tets()));
   for (Index t = 0; t < mesh.num_tets(); ++t) {
     std::array<Index, 4> nodes;
     std::array<Vec3, 4> corners;
     for (int k = 0; k < 4; ++k) {
       nodes[k] = mesh.tets()(t, k);
-      corners[k] = rest.row(nodes[k]).transpose();
+      corners[k] = rest_positions.row(nodes[k]).transpose();
     }
     set_element(t, nodes, corners, volume_fraction.empty() ? 1.0 : volume_fraction[t]);
   }
-  const Vec3 extent = rest.colwise().maxCoeff() - rest.colwise().minCoeff();
+  const Vec3 extent = rest_positions.colwise().maxCoeff() - rest_positions.colwise().minCoeff();
   size = std::max(extent.norm(), std::numeric_limits<double>::min());
-  order_elements(rest);
-  finish_elements();
+  rest = rest_positions;
+  compute_masses();
+  order_from_scratch(rest);
 }
 
 Simulator::Simulator(const TetMesh& mesh, const Material& material, std::span<const double> volume_fraction)
@@ -187,16 +157,7 @@ void Simulator::add_spring(const EmbeddedPoint& p, const EmbeddedPoint& q, doubl
   }
   if (!(stiffness >= 0) || !std::isfinite(stiffness)) throw Error(ErrorKind::kInvalidArgument, "spring: stiffness must not be negative");
   s.springs.push_back({p, q, stiffness});
-  // The spring couples the nodes of two tets: the pattern must hold those blocks.
-  if (s.structure_stale) return;
-  for (const Index a : s.elements[p.tet].nodes) {
-    for (const Index b : s.elements[q.tet].nodes) {
-      if (s.hessian.slot(a, b) < 0) {
-        s.structure_stale = true;
-        return;
-      }
-    }
-  }
+  s.springs_pending = true;  // the pattern must hold the blocks between the two tets' nodes
 }
 void Simulator::clear_springs() { state_->springs.clear(); }
 Index Simulator::num_springs() const { return static_cast<Index>(state_->springs.size()); }
@@ -218,11 +179,13 @@ void SimulatorState::carry_new_nodes(Index first_new_node, std::span<const Index
   x.conservativeResize(total, 3);
   v.conservativeResize(total, 3);
   target.conservativeResize(total, 3);
+  rest.conservativeResize(total, 3);
   for (Index i = 0; i < static_cast<Index>(new_node_source.size()); ++i) {
     const Index source = new_node_source[i];
     x.row(first_new_node + i) = x.row(source);
     v.row(first_new_node + i) = v.row(source);
     target.row(first_new_node + i) = target.row(source);
+    rest.row(first_new_node + i) = rest.row(source);  // a split node is where its source is, in the material
     constraint.push_back(constraint[source]);
   }
   // Springs and contact points name tets and barycentric weights that a cut may change.
@@ -264,12 +227,19 @@ void Simulator::remesh(const Cutter& cutter, const CutBatchReport& batch) {
     for (int k = 0; k < 4; ++k) corners[k] = rest.row(parent[nodes[k]]).transpose();
     s.set_element(copy, nodes, corners, std::min(cutter.material_fraction(copy), 1.0));
   };
+  std::vector<Index> rebuilt;
   for (const Index t : batch.touched) {
-    for (const Index copy : cutter.copies_of(t)) rebuild(copy);
+    for (const Index copy : cutter.copies_of(t)) {
+      rebuild(copy);
+      rebuilt.push_back(copy);
+    }
   }
-  for (const Index copy : batch.changed_tets) rebuild(copy);
-  s.order_new_copies(old_tets, batch.new_tet_source);
-  s.finish_elements(old_tets, batch.new_tet_source);
+  for (const Index copy : batch.changed_tets) {
+    rebuild(copy);
+    rebuilt.push_back(copy);
+  }
+  s.compute_masses();
+  s.update_after_cut(old_tets, batch.new_tet_source, batch.changed_tets, rebuilt);
 }
 
 void Simulator::set_positions(const Points& x) {

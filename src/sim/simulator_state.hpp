@@ -41,13 +41,17 @@ struct SimulatorState {
   Points target;
 
   // The elements in a spatial order (Morton order of their rest centroids; a cut's new copies
-  // follow their sources), cut into clusters of kCluster; cluster k is element_order[k kCluster
-  // ..]. The clusters grouped by colour: no two of a colour share a node, so a colour's clusters
-  // scatter into node vectors and the matrix on all threads at once, every entry receives its
-  // terms in a fixed order whatever the threads, and a cluster's writes stay close in memory.
+  // are appended), cut into clusters of kCluster: cluster k is positions k kCluster ... The
+  // clusters are coloured: no two of a colour share a node, so a colour's clusters scatter into
+  // node vectors and the matrix on all threads at once, every entry receives its terms in a
+  // fixed order whatever the threads, and a cluster's writes stay close in memory.
   static constexpr Index kCluster = 128;
   std::vector<Index> element_order;     // position -> tet id
   std::vector<Index> element_position;  // tet id -> position
+  Index appended_since_order = 0;       // copies appended since the last spatial sort
+  std::vector<Index> cluster_color;
+  std::vector<std::uint64_t> node_colors;  // per node: the colours (below 64) of its clusters
+  bool colors_past_64 = false;             // then node_colors is incomplete: colour from scratch
   std::vector<Index> color_start, color_clusters;
   // What the element loops read and write, stored by position so that they stream through memory
   // (random access to per-element data was half the cost of assembly at 100k tets): the element,
@@ -59,16 +63,21 @@ struct SimulatorState {
   };
   std::vector<OrderedElement> ordered;
   std::vector<Mat3> ordered_v;
-  // The Newton system's structure: the block pattern of elements and springs and each element's
-  // 16 slots in it. Rebuilt at the next step after the mesh or the springs changed.
-  bool structure_stale = true;
+  // The Newton system's block pattern of elements and springs. Built from scratch when due;
+  // otherwise brought up to date at the next step: blocks of the elements a cut changed or added
+  // (pattern_pending, positions) and of springs added since.
   detail::BlockSparseMatrix hessian;
+  bool pattern_rebuild = true;
+  std::vector<Index> pattern_pending;
+  bool springs_pending = false;
+  Index blocks_at_build = 0;
+  Points rest;  // per node
 
   // Scratch reused from step to step, so that a step allocates nothing once sizes settle (and
   // why a Simulator, even through const calls, is for one thread at a time).
   detail::ConjugateGradientWorkspace cg;
   mutable std::vector<double> partial;
-  std::vector<double> damping_values;  // the stiffness at the start of a step, for Rayleigh damping
+  detail::BlockSparseMatrix damping;  // the stiffness at the start of a step, for Rayleigh damping
   std::vector<double> current_gradient, trial_gradient, direction, rhs, weight, product;
   std::vector<std::uint8_t> free, all;
   Points start, prediction, trial, displacement;
@@ -79,26 +88,37 @@ struct SimulatorState {
                                         at.row(e.nodes[2]).transpose(), at.row(e.nodes[3]).transpose());
   }
 
-  /// Rebuilds elements, masses and colours from a mesh (constructor and remesh). O(tets).
+  /// Rebuilds elements, masses, order and colours from a mesh (constructor and remesh). O(T log T).
   void build(const TetMesh& mesh, std::span<const double> volume_fraction);
   /// Element t from its nodes, their rest positions and its material fraction (checked, floored
   /// at kMinVolumeFraction).
   void set_element(Index t, const std::array<Index, 4>& nodes, const std::array<Vec3, 4>& rest, double fraction);
-  /// After elements or their order changed: masses, the ordered copy, warm starts carried to
-  /// their new positions (a new copy i from `new_source[i]`'s, when given; the identity
-  /// otherwise), colours; the structure is marked stale. O(tets).
-  void finish_elements(Index first_new = 0, std::span<const Index> new_source = {});
-  /// Nodes split by a cut start as their sources (position, velocity, constraint); springs and
-  /// contact points are dropped.
+  void compute_masses();
+  /// Nodes split by a cut start as their sources (position, velocity, constraint, rest position);
+  /// springs and contact points are dropped.
   void carry_new_nodes(Index first_new_node, std::span<const Index> new_node_source);
-  /// The spatial order from scratch (construction, and remesh from a whole mesh). O(T log T).
-  void order_elements(const Points& rest);
-  /// After a cut: new copies first_new .. (source[i] each) placed right after their sources. O(T).
-  void order_new_copies(Index first_new, std::span<const Index> source);
+
+  Index num_clusters() const { return (static_cast<Index>(ordered.size()) + kCluster - 1) / kCluster; }
+  std::span<const OrderedElement> cluster(Index k) const;
+  /// The spatial order, the ordered copy and colours from scratch; warm starts follow their
+  /// elements by id; the pattern is due for a build. O(T log T).
+  void order_from_scratch(const Points& rest_positions);
   /// Greedy colouring of the clusters. O(tets) while 64 colours suffice, O(sum over nodes of
   /// their clusters squared) beyond (a node in very many copies).
-  void assign_colors();
-  /// Rebuilds the pattern, slots and colours if stale. O(tets), parallel over nodes.
+  void color_from_scratch();
+  /// The clusters grouped by colour, from cluster_color.
+  void group_colors();
+  /// After a cut whose elements are already in `elements`: elements old_count .. are new copies
+  /// of new_source[i]; `renoded` existed and changed nodes; `rebuilt` are all existing elements
+  /// whose data changed. Appends the new ones, recolours the clusters that changed, and leaves
+  /// the pattern's update for the next step. O(what changed) + O(clusters); from scratch once
+  /// copies appended since the last sort reach a quarter of the mesh.
+  void update_after_cut(Index old_count, std::span<const Index> new_source, std::span<const Index> renoded,
+                        std::span<const Index> rebuilt);
+  /// The pattern from scratch, with every element's slots.
+  void build_pattern();
+  /// Brings the pattern up to date before a step (see the members). O(pending elements and
+  /// springs), or a build.
   void refresh_structure();
 
   /// Elastic energy at `at` (sum of volume * Psi), deterministic. O(tets), parallel.

@@ -92,12 +92,12 @@ TEST_P(Assembly, HessianIsTheGradientsDerivativeAndPositiveSemiDefinite) {
     // The assembled matrix, dense, from its blocks.
     Eigen::MatrixXd H = Eigen::MatrixXd::Zero(3 * n, 3 * n);
     for (Index row = 0; row < n; ++row) {
-      for (Index k = s.hessian.row_begin(row); k < s.hessian.row_end(row); ++k) {
+      s.hessian.for_each_block(row, [&](Index k, Index column) {
         const double* b = s.hessian.block(k);
         for (int i = 0; i < 3; ++i) {
-          for (int j = 0; j < 3; ++j) H(3 * row + i, 3 * s.hessian.column(k) + j) = b[3 * i + j];
+          for (int j = 0; j < 3; ++j) H(3 * row + i, 3 * column + j) = b[3 * i + j];
         }
-      }
+      });
     }
     EXPECT_LT((H - H.transpose()).norm(), 1e-12 * H.norm());
     EXPECT_GE(Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(H).eigenvalues().minCoeff(), -1e-9 * H.norm());
