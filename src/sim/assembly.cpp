@@ -29,12 +29,20 @@ void scatter(const std::array<Index, 4>& nodes, const detail::Vec12& g, double* 
 
 }  // namespace
 
+double SimulatorState::energy_at(Index pos, const Mat3& F, Mat3* stress) const {
+  if (material.model != Model::kCorotated) return detail::energy_and_stress(material.model, parameters, F, stress);
+  // Corotated needs the polar rotation: its SVD starts from the element's last V (read only, so
+  // trial points do not move the warm start).
+  const detail::Svd3 svd = detail::svd3(F, detail::kSvdExact, &ordered_v[pos]);
+  return detail::energy_and_stress(material.model, parameters, F, stress, &svd);
+}
+
 double SimulatorState::elastic_energy(const Points& at) const {
   return detail::sum_chunks(static_cast<Index>(elements.size()), kElementChunk, &partial, [&](Index begin, Index end) {
     double sum = 0;
     for (Index i = begin; i < end; ++i) {
       const Element& e = ordered[i].element;
-      sum += e.volume * detail::energy_and_stress(material.model, parameters, detail::deformation_gradient(e.weights, at.data(), e.nodes), nullptr);
+      sum += e.volume * energy_at(i, detail::deformation_gradient(e.weights, at.data(), e.nodes), nullptr);
     }
     return sum;
   });
@@ -66,17 +74,72 @@ double by_color(const SimulatorState& s, const Body& body) {
 }  // namespace
 
 double SimulatorState::elastic_gradient(const Points& at, std::vector<double>* gradient) const {
+  // Corotated's stress needs an SVD per element: four at a time in the lane kernel, as for the
+  // Hessian. Stable Neo-Hookean's is a few products, scalar.
+  const bool lanes = material.model == Model::kCorotated && detail::element_lanes_available();
+  const detail::LaneMaterial lane_material = lane_parameters();
   return by_color(*this, [&](Index begin, Index end) {
     double energy = 0;
-    for (Index i = begin; i < end; ++i) {
-      const Element& e = ordered[i].element;
-      Mat3 P;
-      const double psi = detail::energy_and_stress(material.model, parameters, detail::deformation_gradient(e.weights, at.data(), e.nodes), &P);
-      scatter(e.nodes, detail::element_gradient(e.weights, e.volume, P), gradient->data());
-      energy += e.volume * psi;
+    if (!lanes) {
+      for (Index i = begin; i < end; ++i) {
+        const Element& e = ordered[i].element;
+        Mat3 P;
+        const double psi = energy_at(i, detail::deformation_gradient(e.weights, at.data(), e.nodes), &P);
+        scatter(e.nodes, detail::element_gradient(e.weights, e.volume, P), gradient->data());
+        energy += e.volume * psi;
+      }
+      return energy;
+    }
+    detail::LaneBatch batch;
+    batch.with_hessian = false;
+    for (Index i = begin; i < end; i += detail::kLaneBatch) {
+      const int group = static_cast<int>(std::min<Index>(detail::kLaneBatch, end - i));
+      pack(at, i, group, &batch);
+      detail::element_hessian_lanes(lane_material, &batch, group);
+      for (int lane = 0; lane < group; ++lane) {
+        const Element& e = ordered[i + lane].element;
+        if (batch.fallback[lane]) {
+          Mat3 F, P;
+          for (int k = 0; k < 9; ++k) F(k / 3, k % 3) = batch.F[lane][k];
+          batch.energy[lane] = energy_at(i + lane, F, &P);
+          const detail::Vec12 g = detail::element_gradient(e.weights, e.volume, P);
+          for (int k = 0; k < 12; ++k) batch.gradient[lane][k] = g[k];
+        }
+        energy += e.volume * batch.energy[lane];
+        scatter(e.nodes, Eigen::Map<const detail::Vec12>(batch.gradient[lane]), gradient->data());
+      }
     }
     return energy;
   });
+}
+
+detail::LaneMaterial SimulatorState::lane_parameters() const {
+  detail::LaneMaterial m;
+  m.corotated = material.model == Model::kCorotated;
+  m.mu = parameters.mu;
+  m.lambda = parameters.lambda;
+  m.svd_tolerance = m.corotated ? detail::kSvdExact : detail::kSvdForHessian;
+  m.rotation_fold = detail::kRotationFold;
+  return m;
+}
+
+void SimulatorState::pack(const Points& at, Index first, int count, detail::LaneBatch* batch) const {
+  for (int lane = 0; lane < count; ++lane) {
+    const Element& el = ordered[first + lane].element;
+    const Mat3 F = detail::deformation_gradient(el.weights, at.data(), el.nodes);
+    const Mat3& V = ordered_v[first + lane];
+    for (int r = 0; r < 3; ++r) {
+      for (int k = 0; k < 3; ++k) {
+        batch->F[lane][3 * r + k] = F(r, k);
+        batch->V[lane][3 * r + k] = V(r, k);
+      }
+    }
+    for (int a = 0; a < 4; ++a) {
+      for (int k = 0; k < 3; ++k) batch->weights[lane][3 * a + k] = el.weights(a, k);
+    }
+    batch->volume[lane] = el.volume;
+    batch->fallback[lane] = true;
+  }
 }
 
 namespace {
@@ -103,12 +166,7 @@ void scatter_blocks(const std::array<Index, 16>& slots, const double (&blocks)[1
 
 double SimulatorState::assemble_hessian(const Points& at, std::vector<double>* gradient) {
   hessian.set_zero();
-  detail::LaneMaterial lane_material;
-  lane_material.corotated = material.model == Model::kCorotated;
-  lane_material.mu = parameters.mu;
-  lane_material.lambda = parameters.lambda;
-  lane_material.svd_tolerance = lane_material.corotated ? detail::kSvdExact : detail::kSvdForHessian;
-  lane_material.rotation_fold = detail::kRotationFold;
+  const detail::LaneMaterial lane_material = lane_parameters();
   const bool lanes = detail::element_lanes_available();
   return by_color(*this, [&](Index begin, Index end) {
     double energy = 0;
@@ -116,22 +174,7 @@ double SimulatorState::assemble_hessian(const Points& at, std::vector<double>* g
     // Elements kLaneBatch at a time (the last group of a cluster may be short).
     for (Index i = begin; i < end; i += detail::kLaneBatch) {
       const int group = static_cast<int>(std::min<Index>(detail::kLaneBatch, end - i));
-      for (int lane = 0; lane < group; ++lane) {
-        const Element& el = ordered[i + lane].element;
-        const Mat3 F = detail::deformation_gradient(el.weights, at.data(), el.nodes);
-        const Mat3& V = ordered_v[i + lane];
-        for (int r = 0; r < 3; ++r) {
-          for (int k = 0; k < 3; ++k) {
-            batch.F[lane][3 * r + k] = F(r, k);
-            batch.V[lane][3 * r + k] = V(r, k);
-          }
-        }
-        for (int a = 0; a < 4; ++a) {
-          for (int k = 0; k < 3; ++k) batch.weights[lane][3 * a + k] = el.weights(a, k);
-        }
-        batch.volume[lane] = el.volume;
-        batch.fallback[lane] = true;
-      }
+      pack(at, i, group, &batch);
       if (lanes) detail::element_hessian_lanes(lane_material, &batch, group);
       for (int lane = 0; lane < group; ++lane) {
         const OrderedElement& o = ordered[i + lane];

@@ -33,6 +33,7 @@ struct LaneBatch {
   double weights[kLaneBatch][12];
   double volume[kLaneBatch];
   double V[kLaneBatch][9];  ///< in: each element's last V (warm start); out: the new one
+  bool with_hessian = true;  ///< false: energy and gradient only (the blocks are left alone)
   // Out.
   double energy[kLaneBatch];        ///< Psi(F) per unit volume
   double gradient[kLaneBatch][12];  ///< volume P w_a, node-major
@@ -44,7 +45,8 @@ struct LaneBatch {
 
 /// Whether the lane kernel can run here: built for x86-64 and the processor has AVX2 and FMA.
 bool element_lanes_available();
-/// Lanes 0 .. count - 1 (count 1 .. kLaneBatch). O(1) per element, no allocation.
+/// Lanes 0 .. count - 1 (count 1 .. kLaneBatch). O(1) per element, no allocation. Without the
+/// Hessian only a zero, non-finite or rank-one F is handed back.
 void element_hessian_lanes(const LaneMaterial& material, LaneBatch* batch, int count);
 
 }  // namespace tetcut::sim::detail

@@ -239,64 +239,66 @@ void element_hessian_lanes(const LaneMaterial& p, LaneBatch* io, int count) {
     }
   }
 
-  // The scaling block's factor: Cholesky where it is positive definite, else the scalar
-  // kernel's eigen-decomposition, lane by lane.
-  Lanes factor[3][3];
-  {
-    const Lanes c00 = sqrt(max(scaling[0][0], broadcast(0)));
-    const Lanes c00_safe = select(c00 > 0, c00, broadcast(1));
-    const Lanes c10 = scaling[1][0] / c00_safe, c20 = scaling[2][0] / c00_safe;
-    const Lanes d1 = scaling[1][1] - c10 * c10;
-    const Lanes c11 = sqrt(max(d1, broadcast(0)));
-    const Lanes c11_safe = select(c11 > 0, c11, broadcast(1));
-    const Lanes c21 = (scaling[2][1] - c20 * c10) / c11_safe;
-    const Lanes d2 = scaling[2][2] - c20 * c20 - c21 * c21;
-    const Mask definite = scaling[0][0] > 0 && d1 > 0 && d2 > 0;
-    factor[0][0] = c00;
-    factor[1][0] = c10;
-    factor[2][0] = c20;
-    factor[0][1] = factor[0][2] = factor[1][2] = broadcast(0);
-    factor[1][1] = c11;
-    factor[2][1] = c21;
-    factor[2][2] = sqrt(max(d2, broadcast(0)));
-    // An indefinite scaling block (strong compression): the scalar kernel clamps it.
-    fallback = fallback || !definite;
-  }
+  if (io->with_hessian) {
+    // The scaling block's factor: Cholesky where it is positive definite, else the scalar
+    // kernel's eigen-decomposition, lane by lane.
+    Lanes factor[3][3];
+    {
+      const Lanes c00 = sqrt(max(scaling[0][0], broadcast(0)));
+      const Lanes c00_safe = select(c00 > 0, c00, broadcast(1));
+      const Lanes c10 = scaling[1][0] / c00_safe, c20 = scaling[2][0] / c00_safe;
+      const Lanes d1 = scaling[1][1] - c10 * c10;
+      const Lanes c11 = sqrt(max(d1, broadcast(0)));
+      const Lanes c11_safe = select(c11 > 0, c11, broadcast(1));
+      const Lanes c21 = (scaling[2][1] - c20 * c10) / c11_safe;
+      const Lanes d2 = scaling[2][2] - c20 * c20 - c21 * c21;
+      const Mask definite = scaling[0][0] > 0 && d1 > 0 && d2 > 0;
+      factor[0][0] = c00;
+      factor[1][0] = c10;
+      factor[2][0] = c20;
+      factor[0][1] = factor[0][2] = factor[1][2] = broadcast(0);
+      factor[1][1] = c11;
+      factor[2][1] = c21;
+      factor[2][2] = sqrt(max(d2, broadcast(0)));
+      // An indefinite scaling block (strong compression): the scalar kernel clamps it.
+      fallback = fallback || !definite;
+    }
 
-  // The factor Q of the Hessian (as element_hessian_factor), then its 10 distinct blocks.
-  const Lanes root_volume = sqrt(volume), half_volume = 0.5 * volume;
-  Lanes w_frame[4][3];  // V^T w_a
-  for (int a = 0; a < 4; ++a) {
-    for (int c = 0; c < 3; ++c) w_frame[a][c] = w[a][0] * V.m[0][c] + w[a][1] * V.m[1][c] + w[a][2] * V.m[2][c];
-  }
-  Lanes q[12][9];
-  for (int k = 0; k < 3; ++k) {
-    const int i = kPairs[k][0], j = kPairs[k][1];
-    const Lanes t = sqrt(half_volume * max(twist[k], broadcast(0))), f = sqrt(half_volume * max(flip[k], broadcast(0)));
+    // The factor Q of the Hessian (as element_hessian_factor), then its 10 distinct blocks.
+    const Lanes root_volume = sqrt(volume), half_volume = 0.5 * volume;
+    Lanes w_frame[4][3];  // V^T w_a
+    for (int a = 0; a < 4; ++a) {
+      for (int c = 0; c < 3; ++c) w_frame[a][c] = w[a][0] * V.m[0][c] + w[a][1] * V.m[1][c] + w[a][2] * V.m[2][c];
+    }
+    Lanes q[12][9];
+    for (int k = 0; k < 3; ++k) {
+      const int i = kPairs[k][0], j = kPairs[k][1];
+      const Lanes t = sqrt(half_volume * max(twist[k], broadcast(0))), f = sqrt(half_volume * max(flip[k], broadcast(0)));
+      for (int a = 0; a < 4; ++a) {
+        for (int r = 0; r < 3; ++r) {
+          const Lanes along_i = w_frame[a][j] * U.m[r][i], along_j = w_frame[a][i] * U.m[r][j];
+          q[3 * a + r][2 * k] = t * (along_i - along_j);
+          q[3 * a + r][2 * k + 1] = f * (along_i + along_j);
+        }
+      }
+    }
     for (int a = 0; a < 4; ++a) {
       for (int r = 0; r < 3; ++r) {
-        const Lanes along_i = w_frame[a][j] * U.m[r][i], along_j = w_frame[a][i] * U.m[r][j];
-        q[3 * a + r][2 * k] = t * (along_i - along_j);
-        q[3 * a + r][2 * k + 1] = f * (along_i + along_j);
+        for (int m = 0; m < 3; ++m) {
+          Lanes sum = broadcast(0);
+          for (int l = 0; l < 3; ++l) sum += U.m[r][l] * factor[l][m] * w_frame[a][l];
+          q[3 * a + r][6 + m] = root_volume * sum;
+        }
       }
     }
-  }
-  for (int a = 0; a < 4; ++a) {
-    for (int r = 0; r < 3; ++r) {
-      for (int m = 0; m < 3; ++m) {
-        Lanes sum = broadcast(0);
-        for (int l = 0; l < 3; ++l) sum += U.m[r][l] * factor[l][m] * w_frame[a][l];
-        q[3 * a + r][6 + m] = root_volume * sum;
-      }
-    }
-  }
-  for (int b = 0; b < 10; ++b) {
-    const int a0 = kBlockRow[b], a1 = kBlockColumn[b];
-    for (int r = 0; r < 3; ++r) {
-      for (int c = 0; c < 3; ++c) {
-        Lanes sum = broadcast(0);
-        for (int m = 0; m < 9; ++m) sum += q[3 * a0 + r][m] * q[3 * a1 + c][m];
-        for (int lane = 0; lane < count; ++lane) io->blocks[lane][b][3 * r + c] = sum[lane];
+    for (int b = 0; b < 10; ++b) {
+      const int a0 = kBlockRow[b], a1 = kBlockColumn[b];
+      for (int r = 0; r < 3; ++r) {
+        for (int c = 0; c < 3; ++c) {
+          Lanes sum = broadcast(0);
+          for (int m = 0; m < 9; ++m) sum += q[3 * a0 + r][m] * q[3 * a1 + c][m];
+          for (int lane = 0; lane < count; ++lane) io->blocks[lane][b][3 * r + c] = sum[lane];
+        }
       }
     }
   }

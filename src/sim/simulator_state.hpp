@@ -5,6 +5,7 @@
 
 #include "sim/block_sparse.hpp"
 #include "sim/elasticity.hpp"
+#include "sim/element_batch.hpp"
 
 #include <tetcut/sim.hpp>
 
@@ -121,6 +122,12 @@ struct SimulatorState {
   /// springs), or a build.
   void refresh_structure();
 
+  /// The material as the lane kernel takes it.
+  detail::LaneMaterial lane_parameters() const;
+  /// Elements at positions first .. first + count - 1 into a lane batch, at positions `at`.
+  void pack(const Points& at, Index first, int count, detail::LaneBatch* batch) const;
+  /// Psi and, when `stress` is set, P of the element at position `pos` for deformation F.
+  double energy_at(Index pos, const Mat3& F, Mat3* stress) const;
   /// Elastic energy at `at` (sum of volume * Psi), deterministic. O(tets), parallel.
   double elastic_energy(const Points& at) const;
   /// Elastic energy at `at`, adding its gradient into `gradient` (3 per node). O(tets), parallel
