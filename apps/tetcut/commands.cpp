@@ -704,9 +704,12 @@ void add_sim_command(CLI::App& app, Action& action) {
       run.progress = [&](int frame, int expected) {
         if (!terminal) return;
         const int total = options->frames >= 0 ? std::min(expected, options->frames) : expected;
-        const int width = 30, filled = total > 0 ? width * frame / total : width;
-        fmt::print(stderr, "\r[{}{}] frame {}/{}  {:.1f} s", std::string(static_cast<std::size_t>(filled), '#'),
-                   std::string(static_cast<std::size_t>(width - filled), ' '), frame, total, seconds_since(start));
+        const int width = 30, filled = total > 0 ? std::min(width, width * frame / total) : width;
+        const double elapsed = seconds_since(start);
+        // Time left at the pace so far (frames take about equally long).
+        const std::string left = frame > 0 && frame < total ? fmt::format(", about {:.0f} s left", elapsed * (total - frame) / frame) : "";
+        fmt::print(stderr, "\r[{}{}] frame {}/{}  {:.1f} s{}    ", std::string(static_cast<std::size_t>(filled), '#'),
+                   std::string(static_cast<std::size_t>(width - filled), ' '), frame, total, elapsed, left);
       };
       Eigen::AlignedBox3d frame_box;
       if (scene.picture_box) frame_box = Eigen::AlignedBox3d(scene.picture_box->min, scene.picture_box->max);
@@ -740,6 +743,11 @@ void add_sim_command(CLI::App& app, Action& action) {
       fmt::print("  mesh             {} tets, {} nodes, {} pieces\n", summary.tets, summary.nodes, summary.pieces);
       fmt::print("  time             {:.2f} s, {:.3f} s per frame, {:.2f} Newton iterations per step\n", summary.wall_seconds,
                  summary.seconds_per_frame, summary.mean_newton_iterations);
+      const SceneStageSeconds& t = summary.stage_seconds;
+      const double per_step = summary.steps > 0 ? 1e3 / summary.steps : 0;
+      fmt::print("  ms per step      {:.2f} (cut {:.2f}, surface {:.2f}, remesh {:.2f}, step {:.2f}); median {:.2f}, max {:.2f}\n",
+                 (t.cut + t.surface + t.remesh + t.step) * per_step, t.cut * per_step, t.surface * per_step, t.remesh * per_step,
+                 t.step * per_step, summary.step_ms_median, summary.step_ms_max);
       if (summary.unconverged_steps > 0) {
         fmt::print(stderr, "tetcut: warning: {} step(s) stopped before Newton converged\n", summary.unconverged_steps);
       }

@@ -14,7 +14,9 @@
 //                   "density", "mass_damping", "stiffness_damping"}
 //     "gravity":   [gx, gy, gz]
 //     "time":      {"dt", "duration" (required), "output_every"}
-//     "solver":    {"tolerance", "max_newton_iterations", "linear": "cg"|"cholesky"}
+//     "solver":    {"mode": "converged"|"real_time", "tolerance", "max_newton_iterations",
+//                   "max_cg_iterations", "linear": "cg"|"cholesky"}   real_time: a fixed budget per step
+//                   (by default 1 Newton iteration of at most 30 CG iterations; see StepOptions::real_time)
 //     "pin":       [{"box": [...]}]                     nodes whose rest position is in the box
 //     "move":      [{"box": [...], "velocity": [...], "from", "until"}]   kinematic nodes
 //     "obstacles": [{"plane": {"point", "normal"}} | {"sphere": {"centre", "radius"}}
@@ -27,6 +29,10 @@
 //                                "segments_per_turn"}
 //                    | "cookie_cutter": {"profile": [[u,v],...], "origin", "u", "v", "depth"}
 //                    | "blade": {"poses": [[ax,ay,az, bx,by,bz], ...]}}]   the strip a blade sweeps
+//     "scalpels":  [{"from", "until", "space": "world"|"rest", "poses": [[ax,ay,az, bx,by,bz], ...]}]
+//                  a blade moving through the poses evenly in time from `from` to `until`; each step
+//                  the strip it swept since the last step is cut, world-space poses followed in the
+//                  material (mapped to rest space through the current motion, as examples/scalpel.cpp)
 //     "transforms":[{"time", "rotate": {"axis", "degrees", "centre"}} | {"time", "translate": [...]}]
 //     "springs":   [{"time", "cuts": [FIRST, LAST], "stiffness"}]   close those cut events' incisions
 //     "output":    {"mesh": true, "surface": true,
@@ -36,6 +42,7 @@
 //
 // Paths are relative to the scene file. Unknown keys are errors, so a typo is never ignored.
 
+#include <tetcut/blade.hpp>
 #include <tetcut/cutter.hpp>
 #include <tetcut/embed.hpp>
 #include <tetcut/sim.hpp>
@@ -53,6 +60,14 @@ struct SceneCut {
   bool world_space = true;
   std::string description;  ///< e.g. "cylinder" or the file name
   TriangleSurface triangles;
+};
+
+struct SceneScalpel {
+  double from = 0, until = 0;
+  bool world_space = true;
+  std::vector<BladePose> poses;  ///< at least 2
+  /// The pose at time t (from <= t <= until): linear between the poses, spread evenly in time.
+  BladePose at(double t) const;
 };
 
 struct SceneTransform {
@@ -88,6 +103,7 @@ struct Scene {
   std::vector<sim::Obstacle> obstacles;
   double contact_stiffness = 0;  ///< 0: the simulator's default
   std::vector<SceneCut> cuts;    ///< sorted by time
+  std::vector<SceneScalpel> scalpels;
   std::vector<SceneTransform> transforms;
   std::vector<SceneSprings> springs;
   bool write_mesh = true, write_surface = true;
@@ -108,13 +124,31 @@ struct SceneRunOptions {
   std::function<void(int, const TriangleSurface&)> frame_surface;
 };
 
+/// Wall time of a run by stage, in seconds (totals).
+struct SceneStageSeconds {
+  double cut = 0;      ///< cutting (for world-space cuts and scalpels: the current shape, the mapping)
+  double surface = 0;  ///< the material surface after cuts, when contact, springs or frames need it
+  double remesh = 0;   ///< the simulator after cuts, and its contact points and springs
+  double step = 0;     ///< the simulation steps
+  double output = 0;   ///< frames, series and pictures
+};
+
 struct SceneSummary {
   int frames = 0, steps = 0, cuts_applied = 0;
   Index tets = 0, nodes = 0, pieces = 0;
   double simulated_seconds = 0;
   double wall_seconds = 0, seconds_per_frame = 0;
-  double mean_newton_iterations = 0;
+  double mean_newton_iterations = 0, mean_cg_iterations = 0;
   int unconverged_steps = 0;
+  /// The largest residual a step left (StepReport::residual; at most the tolerance when every
+  /// step converged).
+  double max_residual = 0;
+  SceneStageSeconds stage_seconds;
+  /// Per simulation step, the time of its cut, surface, remesh and step stages (output apart):
+  /// median, 99th percentile and largest, in milliseconds.
+  double step_ms_median = 0, step_ms_p99 = 0, step_ms_max = 0;
+  /// The bounding box of the nodes at the end.
+  Box final_box;
   /// Springs across incisions at the end, and the widest distance between the two ends of one
   /// when they were attached (how far the incision had opened) and at the end (how well it closed).
   Index springs = 0;

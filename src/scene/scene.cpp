@@ -11,7 +11,9 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <array>
 #include <chrono>
+#include <optional>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -232,7 +234,7 @@ Scene load_scene(const std::filesystem::path& path) {
   const std::string file = path.string();
   const Value root(json, "", &file);
   root.allow({"mesh", "embed", "material", "gravity", "time", "solver", "pin", "move", "obstacles", "contact_stiffness",
-              "cuts", "transforms", "springs", "output"});
+              "cuts", "scalpels", "transforms", "springs", "output"});
   Scene scene;
   scene.source = path;
 
@@ -278,9 +280,15 @@ Scene load_scene(const std::filesystem::path& path) {
   scene.duration = time.at("duration").positive();
   if (const auto every = time.get("output_every")) scene.output_every = every->positive();
   if (const auto solver = root.get("solver")) {
-    solver->allow({"tolerance", "max_newton_iterations", "linear"});
+    solver->allow({"mode", "tolerance", "max_newton_iterations", "max_cg_iterations", "linear"});
+    if (const auto mode = solver->get("mode"); mode && mode->choice({"converged", "real_time"}) == "real_time") {
+      const sim::StepOptions budget = sim::StepOptions::real_time(scene.step.dt);
+      scene.step.max_newton_iterations = budget.max_newton_iterations;
+      scene.step.max_cg_iterations = budget.max_cg_iterations;
+    }
     if (const auto v = solver->get("tolerance")) scene.step.tolerance = v->positive();
     if (const auto v = solver->get("max_newton_iterations")) scene.step.max_newton_iterations = v->integer(1);
+    if (const auto v = solver->get("max_cg_iterations")) scene.step.max_cg_iterations = v->integer(1);
     if (const auto v = solver->get("linear")) {
       scene.step.solver = v->choice({"cg", "cholesky"}) == "cg" ? sim::LinearSolver::kConjugateGradient : sim::LinearSolver::kCholesky;
     }
@@ -325,6 +333,22 @@ Scene load_scene(const std::filesystem::path& path) {
   if (const auto cuts = root.get("cuts")) {
     for (const Value& cut : cuts->array()) scene.cuts.push_back(load_cut(cut, path));
     std::stable_sort(scene.cuts.begin(), scene.cuts.end(), [](const SceneCut& a, const SceneCut& b) { return a.time < b.time; });
+  }
+  if (const auto scalpels = root.get("scalpels")) {
+    for (const Value& blade : scalpels->array()) {
+      blade.allow({"from", "until", "space", "poses"});
+      SceneScalpel scalpel;
+      scalpel.from = blade.at("from").non_negative();
+      scalpel.until = blade.at("until").non_negative();
+      if (!(scalpel.until > scalpel.from)) blade.at("until").fail("must come after 'from'");
+      if (const auto space = blade.get("space")) scalpel.world_space = space->choice({"rest", "world"}) == "world";
+      for (const Value& pose : blade.at("poses").array()) {
+        const auto ab = pose.numbers(6);
+        scalpel.poses.push_back({Vec3(ab[0], ab[1], ab[2]), Vec3(ab[3], ab[4], ab[5])});
+      }
+      if (scalpel.poses.size() < 2) blade.at("poses").fail("needs at least 2 poses");
+      scene.scalpels.push_back(std::move(scalpel));
+    }
   }
   if (const auto transforms = root.get("transforms")) {
     for (const Value& t : transforms->array()) {
@@ -373,14 +397,18 @@ Scene load_scene(const std::filesystem::path& path) {
   return scene;
 }
 
+BladePose SceneScalpel::at(double t) const {
+  const double span = until - from;
+  const double u = std::clamp(span > 0 ? (t - from) / span : 1.0, 0.0, 1.0) * static_cast<double>(poses.size() - 1);
+  const std::size_t k = std::min(static_cast<std::size_t>(u), poses.size() - 2);
+  const double f = u - static_cast<double>(k);
+  return {(1 - f) * poses[k].a + f * poses[k + 1].a, (1 - f) * poses[k].b + f * poses[k + 1].b};
+}
+
 namespace {
 
-// The simulator's volume fractions: the cut mesh's, at most 1 (a rounding above it is not material).
-std::vector<double> material_fractions(const CutMesh& mesh) {
-  std::vector<double> fraction = mesh.material_fractions();
-  for (double& f : fraction) f = std::min(f, 1.0);
-  return fraction;
-}
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
 
 bool in_box(const Box& box, const Vec3& x) { return (x.array() >= box.min.array()).all() && (x.array() <= box.max.array()).all(); }
 
@@ -396,200 +424,380 @@ void write_frame_series(const std::filesystem::path& path, const std::string& pr
   write_series(path, entries);
 }
 
-}  // namespace
+double percentile(std::vector<double> v, double p) {
+  if (v.empty()) return 0;
+  std::sort(v.begin(), v.end());
+  return v[std::min(v.size() - 1, static_cast<std::size_t>(p * static_cast<double>(v.size() - 1) + 0.5))];
+}
 
-SceneSummary run_scene(const Scene& scene, const std::filesystem::path& directory, const SceneRunOptions& options) {
-  const auto start_time = std::chrono::steady_clock::now();
-  std::filesystem::create_directories(directory);
-  Cutter cutter = scene.embed_surface ? embed(scene.mesh, *scene.embed_surface, scene.embed_options) : Cutter(scene.mesh);
-  CutResult result = cutter.result();
-  std::vector<double> fractions = material_fractions(result.mesh);
-  sim::Simulator sim(result.mesh.mesh, scene.material, fractions);
-  if (scene.contact_stiffness > 0) sim.set_contact_stiffness(scene.contact_stiffness);
-  for (const sim::Obstacle& o : scene.obstacles) sim.add_obstacle(o);
-
-  const auto rest_of = [&](Index node) { return Vec3(result.mesh.mesh.rest().row(node).transpose()); };
-  std::vector<std::uint8_t> pinned;
-  const auto apply_pins = [&] {
-    pinned.assign(static_cast<std::size_t>(sim.num_nodes()), 0);
-    for (Index n = 0; n < sim.num_nodes(); ++n) {
+// One run of a scene: the cutter, the simulator and the material surface advanced a step at a
+// time, with the scene's timed events applied before the step they fall in. After a cut the
+// simulator follows the cutter's batch (Simulator::remesh from the cutter: only what the batch
+// touched); the material surface is rebuilt when contact, springs or a frame need it, and the
+// whole result (pieces) only for frames and the summary.
+class SceneRunner {
+ public:
+  SceneRunner(const Scene& scene, const std::filesystem::path& directory, const SceneRunOptions& options)
+      : scene_(scene),
+        directory_(directory),
+        options_(options),
+        cutter_(scene.embed_surface ? embed(scene.mesh, *scene.embed_surface, scene.embed_options) : Cutter(scene.mesh)),
+        sim_(start_simulator()),
+        cut_ids_(scene.cuts.size(), {-1, -1}),
+        scalpel_rest_(scene.scalpels.size()) {
+    if (scene.contact_stiffness > 0) sim_.set_contact_stiffness(scene.contact_stiffness);
+    for (const sim::Obstacle& o : scene.obstacles) sim_.add_obstacle(o);
+    pinned_.assign(static_cast<std::size_t>(sim_.num_nodes()), 0);
+    for (Index n = 0; n < sim_.num_nodes(); ++n) {
       for (const Box& box : scene.pins) {
         if (in_box(box, rest_of(n))) {
-          pinned[n] = 1;
-          sim.pin(n);
+          pinned_[n] = 1;
+          sim_.pin(n);
         }
       }
     }
-  };
-  apply_pins();
-  // Cut id ranges of the applied cut events, for springs.
-  std::vector<std::pair<std::int64_t, std::int64_t>> cut_ids(scene.cuts.size(), {-1, -1});
-  std::vector<const SceneSprings*> active_springs;
-  std::vector<std::pair<sim::EmbeddedPoint, sim::EmbeddedPoint>> spring_ends;
-  const auto refresh_constraints = [&] {
-    if (!scene.obstacles.empty()) {
-      std::vector<sim::EmbeddedPoint> points;
-      for (Index v = 0; v < result.surface.surface.num_vertices(); ++v) {
-        points.push_back({result.surface.vertex_tet[v], result.surface.vertex_weights.row(v).transpose()});
-      }
-      sim.set_contact_points(std::move(points));
-    }
-    sim.clear_springs();
-    spring_ends.clear();
-    for (const SceneSprings* s : active_springs) {
-      const double k = s->stiffness > 0 ? s->stiffness : 100 * sim.contact_stiffness();
-      for (int c = s->first_cut; c <= s->last_cut; ++c) {
-        if (cut_ids[c].first < 0) continue;  // not applied yet
-        for (const auto& [p, q] : sim::incision_pairs(result.surface, cut_ids[c].first, cut_ids[c].second)) {
-          sim.add_spring(p, q, k);
-          spring_ends.emplace_back(p, q);
-        }
-      }
-    }
-  };
-  const auto widest_spring = [&] {
-    double gap = 0;
-    for (const auto& [p, q] : spring_ends) gap = std::max(gap, (sim.position(p) - sim.position(q)).norm());
-    return gap;
-  };
-  refresh_constraints();
+    mesh_fields_.current_positions = true;
+    refresh_constraints();
+  }
 
-  const double dt = scene.step.dt;
-  const int steps = std::max(1, static_cast<int>(std::llround(scene.duration / dt)));
-  const int every = scene.output_every > 0 ? std::max(1, static_cast<int>(std::llround(scene.output_every / dt))) : 1;
-  const int expected_frames = steps / every;
-  std::vector<double> times;
-  SceneSummary summary;
-  // What a frame's mesh file carries per tet changes only with the mesh: set after each cut.
-  TetMeshWriteOptions mesh_fields;
-  mesh_fields.current_positions = true;
-  const auto refresh_mesh_fields = [&] {
-    CellField piece{"piece", {}, true}, fraction{"material_fraction", {}, false};
-    piece.values.assign(result.mesh.tet_piece.begin(), result.mesh.tet_piece.end());
-    fraction.values = fractions;
-    mesh_fields.cell_fields = {std::move(piece), std::move(fraction)};
-  };
-  refresh_mesh_fields();
-  const auto write_frame = [&](double t) {
-    const int frame = static_cast<int>(times.size());
-    char name[64];
-    if (scene.write_mesh) {
-      result.mesh.mesh.set_current(sim.positions());
-      std::snprintf(name, sizeof name, "mesh_%04d.vtu", frame);
-      write_tet_mesh(directory / name, result.mesh.mesh, mesh_fields);
+  SceneSummary run() {
+    const auto start_time = Clock::now();
+    std::filesystem::create_directories(directory_);
+    const double dt = scene_.step.dt;
+    const int steps = std::max(1, static_cast<int>(std::llround(scene_.duration / dt)));
+    const int every = scene_.output_every > 0 ? std::max(1, static_cast<int>(std::llround(scene_.output_every / dt))) : 1;
+    expected_frames_ = steps / every;
+    write_frame(0);
+    std::vector<double> step_ms;
+    double newton_total = 0, cg_total = 0;
+    for (int s = 0; s < steps; ++s) {
+      const double t = s * dt;
+      const double now = t + dt / 2;  // events due by the middle of this step happen before it
+      const SceneStageSeconds before = summary_.stage_seconds;
+      apply_transforms(now);
+      current_set_ = false;
+      bool cut = apply_cuts(now);
+      cut = apply_scalpels(t, t + dt) || cut;
+      const bool springs_added = apply_springs(now);
+      if (cut || springs_added) {
+        const auto start = Clock::now();
+        refresh_constraints();
+        summary_.stage_seconds.remesh += seconds_since(start);
+      }
+      if (springs_added) summary_.spring_gap_when_attached = std::max(summary_.spring_gap_when_attached, widest_spring());
+      apply_moves(t);
+      const auto step_start = Clock::now();
+      const sim::StepReport report = sim_.step(scene_.step);
+      summary_.stage_seconds.step += seconds_since(step_start);
+      newton_total += report.newton_iterations;
+      cg_total += report.cg_iterations;
+      summary_.max_residual = std::max(summary_.max_residual, report.residual);
+      summary_.unconverged_steps += report.converged ? 0 : 1;
+      ++summary_.steps;
+      const SceneStageSeconds& after = summary_.stage_seconds;
+      step_ms.push_back(1e3 * ((after.cut - before.cut) + (after.surface - before.surface) + (after.remesh - before.remesh) +
+                               (after.step - before.step)));
+      if ((s + 1) % every == 0) {
+        write_frame((s + 1) * dt);
+        if (options_.max_frames >= 0 && static_cast<int>(times_.size()) - 1 >= options_.max_frames) break;
+      }
     }
-    if (scene.write_surface || options.frame_surface) {
-      TriangleSurface surface = result.surface.surface;
-      surface.vertices = result.surface.positions(result.mesh, sim.positions());
-      std::snprintf(name, sizeof name, "surface_%04d.vtp", frame);
-      if (scene.write_surface) write_surface(directory / name, surface);
-      if (options.frame_surface) options.frame_surface(frame, surface);
-    }
-    times.push_back(t);
-    if (scene.write_mesh) write_frame_series(directory / "mesh.pvd", "mesh", ".vtu", times);
-    if (scene.write_surface) write_frame_series(directory / "surface.pvd", "surface", ".vtp", times);
-    if (options.progress) options.progress(frame, expected_frames);
-  };
-  write_frame(0);
+    const CutResult& r = result();
+    summary_.frames = static_cast<int>(times_.size());
+    summary_.springs = static_cast<Index>(spring_ends_.size());
+    summary_.spring_gap_final = widest_spring();
+    summary_.tets = r.mesh.mesh.num_tets();
+    summary_.nodes = r.mesh.mesh.num_nodes();
+    summary_.pieces = r.mesh.num_pieces();
+    summary_.simulated_seconds = summary_.steps * dt;
+    summary_.wall_seconds = seconds_since(start_time);
+    summary_.seconds_per_frame = summary_.frames > 1 ? summary_.wall_seconds / (summary_.frames - 1) : summary_.wall_seconds;
+    summary_.mean_newton_iterations = summary_.steps > 0 ? newton_total / summary_.steps : 0;
+    summary_.mean_cg_iterations = summary_.steps > 0 ? cg_total / summary_.steps : 0;
+    summary_.step_ms_median = percentile(step_ms, 0.5);
+    summary_.step_ms_p99 = percentile(step_ms, 0.99);
+    summary_.step_ms_max = step_ms.empty() ? 0 : *std::max_element(step_ms.begin(), step_ms.end());
+    summary_.final_box = {sim_.positions().colwise().minCoeff().transpose(), sim_.positions().colwise().maxCoeff().transpose()};
+    write_summary();
+    return summary_;
+  }
 
-  std::size_t next_cut = 0, next_transform = 0, next_springs = 0;
-  double newton_total = 0;
-  for (int s = 0; s < steps; ++s) {
-    const double t = s * dt;
-    const double now = t + dt / 2;  // events due by the middle of this step happen before it
-    while (next_transform < scene.transforms.size() && scene.transforms[next_transform].time <= now) {
-      const SceneTransform& tr = scene.transforms[next_transform++];
-      Points x = sim.positions(), v = sim.velocities();
-      for (Index n = 0; n < sim.num_nodes(); ++n) {
+ private:
+  sim::Simulator start_simulator() {
+    const CutResult& r = result();
+    std::vector<double> fractions = r.mesh.material_fractions();
+    for (double& f : fractions) f = std::min(f, 1.0);  // a rounding above 1 is not material
+    return sim::Simulator(r.mesh.mesh, scene_.material, fractions);
+  }
+
+  Vec3 rest_of(Index node) const { return cutter_.input().rest().row(cutter_.node_parent()[node]).transpose(); }
+
+  // The whole result (pieces, the mesh with its fields), rebuilt after cuts when asked for.
+  CutResult& result() {
+    if (!result_) {
+      result_ = cutter_.result();
+      surface_ = result_->surface;
+      surface_current_ = true;
+    }
+    return *result_;
+  }
+  const MaterialSurface& surface() {
+    if (!surface_current_) {
+      const auto start = Clock::now();
+      surface_ = cutter_.surface();
+      surface_current_ = true;
+      summary_.stage_seconds.surface += seconds_since(start);
+    }
+    return surface_;
+  }
+
+  void apply_transforms(double now) {
+    while (next_transform_ < scene_.transforms.size() && scene_.transforms[next_transform_].time <= now) {
+      const SceneTransform& tr = scene_.transforms[next_transform_++];
+      Points x = sim_.positions(), v = sim_.velocities();
+      for (Index n = 0; n < sim_.num_nodes(); ++n) {
         x.row(n) = (tr.rotation * (x.row(n).transpose() - tr.centre) + tr.centre + tr.translation).transpose();
         v.row(n) = (tr.rotation * v.row(n).transpose()).transpose();
       }
-      sim.set_positions(x);
-      sim.set_velocities(v);
-      for (Index n = 0; n < sim.num_nodes(); ++n) {
-        if (pinned[n]) sim.pin(n);
+      sim_.set_positions(x);
+      sim_.set_velocities(v);
+      for (Index n = 0; n < sim_.num_nodes(); ++n) {
+        if (pinned_[n]) sim_.pin(n);
       }
     }
-    bool remeshed = false;
-    while (next_cut < scene.cuts.size() && scene.cuts[next_cut].time <= now) {
-      const SceneCut& cut = scene.cuts[next_cut];
-      const std::int64_t first_id = cutter.num_cut_triangles();
+  }
+
+  // World-space events of one step see the mesh where the simulator has it; new nodes of a
+  // batch start at their sources, so once per step is enough.
+  void set_current_once() {
+    if (current_set_) return;
+    cutter_.set_current(sim_.positions());
+    current_set_ = true;
+  }
+
+  void after_batch(const CutBatchReport& batch) {
+    const auto start = Clock::now();
+    sim_.remesh(cutter_, batch);
+    pinned_.resize(static_cast<std::size_t>(sim_.num_nodes()), 0);
+    for (Index i = 0; i < static_cast<Index>(batch.new_node_source.size()); ++i) {
+      pinned_[batch.first_new_node + i] = pinned_[batch.new_node_source[i]];
+    }
+    result_.reset();
+    surface_current_ = false;
+    ++summary_.cuts_applied;
+    summary_.stage_seconds.remesh += seconds_since(start);
+  }
+
+  bool apply_cuts(double now) {
+    bool any = false;
+    while (next_cut_ < scene_.cuts.size() && scene_.cuts[next_cut_].time <= now) {
+      const SceneCut& cut = scene_.cuts[next_cut_];
+      const auto start = Clock::now();
+      const std::int64_t first_id = cutter_.num_cut_triangles();
       CutBatchReport batch;
       if (cut.world_space) {
-        cutter.set_current(sim.positions());
-        batch = cutter.cut_deformed(cut.triangles);
+        set_current_once();
+        batch = cutter_.cut_deformed(cut.triangles);
       } else {
-        batch = cutter.cut(cut.triangles);
+        batch = cutter_.cut(cut.triangles);
       }
-      cut_ids[next_cut] = {first_id, cutter.num_cut_triangles()};
-      ++next_cut;
-      ++summary.cuts_applied;
-      result = cutter.result();
-      fractions = material_fractions(result.mesh);
-      refresh_mesh_fields();
-      sim.remesh(result.mesh.mesh, fractions, batch.first_new_node, batch.new_node_source);
-      pinned.resize(static_cast<std::size_t>(sim.num_nodes()), 0);
-      for (Index i = 0; i < static_cast<Index>(batch.new_node_source.size()); ++i) {
-        pinned[batch.first_new_node + i] = pinned[batch.new_node_source[i]];
+      cut_ids_[next_cut_++] = {first_id, cutter_.num_cut_triangles()};
+      summary_.stage_seconds.cut += seconds_since(start);
+      after_batch(batch);
+      any = true;
+    }
+    return any;
+  }
+
+  // Each scalpel active during [t0, t1] cuts the strip it swept, between its rest-space poses at
+  // the start and the end of the step (world-space poses mapped through the current motion).
+  bool apply_scalpels(double t0, double t1) {
+    bool any = false;
+    for (std::size_t i = 0; i < scene_.scalpels.size(); ++i) {
+      const SceneScalpel& blade = scene_.scalpels[i];
+      if (t1 <= blade.from || t0 >= blade.until) continue;
+      const auto start = Clock::now();
+      const auto to_material = [&](const BladePose& pose) {
+        if (!blade.world_space) return pose;
+        set_current_once();
+        Points world(2, 3);
+        world.row(0) = pose.a.transpose();
+        world.row(1) = pose.b.transpose();
+        const Points rest = cutter_.to_rest(world);
+        return BladePose{rest.row(0).transpose(), rest.row(1).transpose()};
+      };
+      if (!scalpel_rest_[i]) scalpel_rest_[i] = to_material(blade.at(std::max(t0, blade.from)));
+      const BladePose end = to_material(blade.at(std::min(t1, blade.until)));
+      const std::array<BladePose, 2> strip{*scalpel_rest_[i], end};
+      scalpel_rest_[i] = end;
+      const TriangleSurface triangles = swept_blade(strip);
+      CutBatchReport batch;
+      if (triangles.num_triangles() > 0) batch = cutter_.cut(triangles);
+      summary_.stage_seconds.cut += seconds_since(start);
+      if (triangles.num_triangles() == 0) continue;  // the blade stood still
+      after_batch(batch);
+      any = true;
+    }
+    return any;
+  }
+
+  bool apply_springs(double now) {
+    bool added = false;
+    while (next_springs_ < scene_.springs.size() && scene_.springs[next_springs_].time <= now) {
+      active_springs_.push_back(&scene_.springs[next_springs_++]);
+      added = true;
+    }
+    return added;
+  }
+
+  // Contact points (the surface's vertices) and springs across incisions name tets: set again
+  // after every cut.
+  void refresh_constraints() {
+    if (!scene_.obstacles.empty()) {
+      const MaterialSurface& s = surface();
+      std::vector<sim::EmbeddedPoint> points;
+      points.reserve(static_cast<std::size_t>(s.surface.num_vertices()));
+      for (Index v = 0; v < s.surface.num_vertices(); ++v) points.push_back({s.vertex_tet[v], s.vertex_weights.row(v).transpose()});
+      sim_.set_contact_points(std::move(points));
+    }
+    sim_.clear_springs();
+    spring_ends_.clear();
+    for (const SceneSprings* springs : active_springs_) {
+      const double k = springs->stiffness > 0 ? springs->stiffness : 100 * sim_.contact_stiffness();
+      for (int c = springs->first_cut; c <= springs->last_cut; ++c) {
+        if (cut_ids_[c].first < 0) continue;  // not applied yet
+        for (const auto& [p, q] : sim::incision_pairs(surface(), cut_ids_[c].first, cut_ids_[c].second)) {
+          sim_.add_spring(p, q, k);
+          spring_ends_.emplace_back(p, q);
+        }
       }
-      remeshed = true;
     }
-    bool springs_added = false;
-    while (next_springs < scene.springs.size() && scene.springs[next_springs].time <= now) {
-      active_springs.push_back(&scene.springs[next_springs++]);
-      remeshed = springs_added = true;
-    }
-    if (remeshed) refresh_constraints();
-    if (springs_added) summary.spring_gap_when_attached = std::max(summary.spring_gap_when_attached, widest_spring());
-    // Kinematic nodes: those in an active move box go with its velocity; others are let go.
-    for (Index n = 0; n < sim.num_nodes() && !scene.moves.empty(); ++n) {
-      if (pinned[n]) continue;
+  }
+
+  double widest_spring() const {
+    double gap = 0;
+    for (const auto& [p, q] : spring_ends_) gap = std::max(gap, (sim_.position(p) - sim_.position(q)).norm());
+    return gap;
+  }
+
+  // Kinematic nodes: those in an active move box go with its velocity; others are let go.
+  void apply_moves(double t) {
+    if (scene_.moves.empty()) return;
+    for (Index n = 0; n < sim_.num_nodes(); ++n) {
+      if (pinned_[n]) continue;
       bool moved = false;
-      for (const SceneMove& m : scene.moves) {
+      for (const SceneMove& m : scene_.moves) {
         if (t + 1e-12 >= m.from && t < m.until && in_box(m.box, rest_of(n))) {
-          sim.move_to(n, sim.positions().row(n).transpose() + dt * m.velocity);
+          sim_.move_to(n, sim_.positions().row(n).transpose() + scene_.step.dt * m.velocity);
           moved = true;
           break;
         }
       }
-      if (!moved) sim.release(n);
-    }
-    const sim::StepReport report = sim.step(scene.step);
-    newton_total += report.newton_iterations;
-    summary.unconverged_steps += report.converged ? 0 : 1;
-    ++summary.steps;
-    if ((s + 1) % every == 0) {
-      write_frame((s + 1) * dt);
-      if (options.max_frames >= 0 && static_cast<int>(times.size()) - 1 >= options.max_frames) break;
+      if (!moved) sim_.release(n);
     }
   }
-  summary.frames = static_cast<int>(times.size());
-  summary.springs = static_cast<Index>(spring_ends.size());
-  summary.spring_gap_final = widest_spring();
-  summary.tets = result.mesh.mesh.num_tets();
-  summary.nodes = result.mesh.mesh.num_nodes();
-  summary.pieces = result.mesh.num_pieces();
-  summary.simulated_seconds = summary.steps * dt;
-  summary.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_time).count();
-  summary.seconds_per_frame = summary.frames > 1 ? summary.wall_seconds / (summary.frames - 1) : summary.wall_seconds;
-  summary.mean_newton_iterations = summary.steps > 0 ? newton_total / summary.steps : 0;
-  const Json json{{"scene", scene.source.string()},
-                  {"frames", summary.frames},
-                  {"steps", summary.steps},
-                  {"simulated_seconds", summary.simulated_seconds},
-                  {"cuts_applied", summary.cuts_applied},
-                  {"tets", summary.tets},
-                  {"nodes", summary.nodes},
-                  {"pieces", summary.pieces},
-                  {"wall_seconds", summary.wall_seconds},
-                  {"seconds_per_frame", summary.seconds_per_frame},
-                  {"mean_newton_iterations", summary.mean_newton_iterations},
-                  {"unconverged_steps", summary.unconverged_steps},
-                  {"springs", summary.springs},
-                  {"spring_gap_when_attached", summary.spring_gap_when_attached},
-                  {"spring_gap_final", summary.spring_gap_final}};
-  write_text_file(directory / "summary.json", json.dump(2) + "\n");
-  return summary;
+
+  void write_frame(double t) {
+    const auto start = Clock::now();
+    const int frame = static_cast<int>(times_.size());
+    char name[64];
+    if (scene_.write_mesh) {
+      CutResult& r = result();
+      if (fields_for_cut_ != summary_.cuts_applied || frame == 0) {
+        // What a frame's mesh file carries per tet changes only with the mesh.
+        CellField piece{"piece", {}, true}, fraction{"material_fraction", {}, false};
+        piece.values.assign(r.mesh.tet_piece.begin(), r.mesh.tet_piece.end());
+        fraction.values = r.mesh.material_fractions();
+        for (double& f : fraction.values) f = std::min(f, 1.0);
+        mesh_fields_.cell_fields = {std::move(piece), std::move(fraction)};
+        fields_for_cut_ = summary_.cuts_applied;
+      }
+      r.mesh.mesh.set_current(sim_.positions());
+      std::snprintf(name, sizeof name, "mesh_%04d.vtu", frame);
+      write_tet_mesh(directory_ / name, r.mesh.mesh, mesh_fields_);
+    }
+    if (scene_.write_surface || options_.frame_surface) {
+      const MaterialSurface& s = surface();
+      TriangleSurface moved = s.surface;
+      const auto& tets = cutter_.tet_nodes();
+      const Points& x = sim_.positions();
+      for (Index v = 0; v < moved.num_vertices(); ++v) {
+        Vec3 p = Vec3::Zero();
+        for (int k = 0; k < 4; ++k) p += s.vertex_weights(v, k) * x.row(tets[s.vertex_tet[v]][k]).transpose();
+        moved.vertices.row(v) = p.transpose();
+      }
+      std::snprintf(name, sizeof name, "surface_%04d.vtp", frame);
+      if (scene_.write_surface) write_surface(directory_ / name, moved);
+      if (options_.frame_surface) options_.frame_surface(frame, moved);
+    }
+    times_.push_back(t);
+    if (scene_.write_mesh) write_frame_series(directory_ / "mesh.pvd", "mesh", ".vtu", times_);
+    if (scene_.write_surface) write_frame_series(directory_ / "surface.pvd", "surface", ".vtp", times_);
+    summary_.stage_seconds.output += seconds_since(start);
+    if (options_.progress) options_.progress(frame, expected_frames_);
+  }
+
+  void write_summary() const {
+    const SceneSummary& s = summary_;
+    const double per_step = s.steps > 0 ? 1e3 / s.steps : 0;
+    const SceneStageSeconds& t = s.stage_seconds;
+    const Json json{{"scene", scene_.source.string()},
+                    {"frames", s.frames},
+                    {"steps", s.steps},
+                    {"simulated_seconds", s.simulated_seconds},
+                    {"cuts_applied", s.cuts_applied},
+                    {"tets", s.tets},
+                    {"nodes", s.nodes},
+                    {"pieces", s.pieces},
+                    {"wall_seconds", s.wall_seconds},
+                    {"seconds_per_frame", s.seconds_per_frame},
+                    {"mean_newton_iterations", s.mean_newton_iterations},
+                    {"mean_cg_iterations", s.mean_cg_iterations},
+                    {"unconverged_steps", s.unconverged_steps},
+                    {"max_residual", s.max_residual},
+                    {"ms_per_step",
+                     {{"cut", t.cut * per_step},
+                      {"surface", t.surface * per_step},
+                      {"remesh", t.remesh * per_step},
+                      {"step", t.step * per_step},
+                      {"total", (t.cut + t.surface + t.remesh + t.step) * per_step},
+                      {"median", s.step_ms_median},
+                      {"p99", s.step_ms_p99},
+                      {"max", s.step_ms_max}}},
+                    {"output_seconds", t.output},
+                    {"final_box", {s.final_box.min[0], s.final_box.min[1], s.final_box.min[2], s.final_box.max[0], s.final_box.max[1], s.final_box.max[2]}},
+                    {"springs", s.springs},
+                    {"spring_gap_when_attached", s.spring_gap_when_attached},
+                    {"spring_gap_final", s.spring_gap_final}};
+    write_text_file(directory_ / "summary.json", json.dump(2) + "\n");
+  }
+
+  const Scene& scene_;
+  std::filesystem::path directory_;
+  const SceneRunOptions& options_;
+  Cutter cutter_;
+  std::optional<CutResult> result_;
+  MaterialSurface surface_;
+  bool surface_current_ = false;
+  sim::Simulator sim_;
+  std::vector<std::uint8_t> pinned_;
+  std::vector<std::pair<std::int64_t, std::int64_t>> cut_ids_;  // cut id ranges of applied cut events, for springs
+  std::vector<std::optional<BladePose>> scalpel_rest_;           // each scalpel's last pose, in rest space
+  std::vector<const SceneSprings*> active_springs_;
+  std::vector<std::pair<sim::EmbeddedPoint, sim::EmbeddedPoint>> spring_ends_;
+  std::size_t next_cut_ = 0, next_transform_ = 0, next_springs_ = 0;
+  bool current_set_ = false;
+  TetMeshWriteOptions mesh_fields_;
+  int fields_for_cut_ = -1;
+  std::vector<double> times_;
+  int expected_frames_ = 0;
+  SceneSummary summary_;
+};
+
+}  // namespace
+
+SceneSummary run_scene(const Scene& scene, const std::filesystem::path& directory, const SceneRunOptions& options) {
+  return SceneRunner(scene, directory, options).run();
 }
 
 }  // namespace tetcut

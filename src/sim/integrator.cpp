@@ -227,7 +227,9 @@ StepReport Simulator::minimise(const StepOptions& options, bool inertia) {
   StepReport report;
   double energy = potential.evaluate_with_hessian(x, &s.current_gradient);
   bool hessian_current = true, full_step = true;
-  double last_half_decrement = 0;
+  // The best measure known of half the Newton decrement at x: the decrement itself when Newton
+  // stopped there without moving, the bound from the gradient after a move (dynamic steps).
+  double left = inertia ? decrement_bound(s.current_gradient) : 0.0;
   report.assemble_seconds += seconds_since(assemble_start);
   for (int iteration = 0; iteration < options.max_newton_iterations; ++iteration) {
     if (!hessian_current) {
@@ -261,8 +263,8 @@ StepReport Simulator::minimise(const StepOptions& options, bool inertia) {
     double decrement = 0;
     for (std::size_t k = 0; k < size; ++k) decrement += s.rhs[k] * s.direction[k];
     report.newton_iterations = iteration + 1;
-    last_half_decrement = decrement / 2;
     if (!(decrement >= 0) || !std::isfinite(decrement)) break;  // not a descent direction: give up
+    left = decrement / 2;
     if (decrement / 2 <= threshold) {
       report.converged = true;
       break;
@@ -290,13 +292,15 @@ StepReport Simulator::minimise(const StepOptions& options, bool inertia) {
     full_step = t == 1;
     report.line_search_seconds += seconds_since(search_start);
     if (!accepted) break;  // at the limit of precision
-    if (inertia && decrement_bound(s.current_gradient) <= threshold) {
-      report.converged = true;
-      break;
+    if (inertia) {
+      left = decrement_bound(s.current_gradient);
+      if (left <= threshold) {
+        report.converged = true;
+        break;
+      }
     }
   }
   report.energy = energy;
-  const double left = inertia ? decrement_bound(s.current_gradient) : last_half_decrement;
   report.residual = std::sqrt(std::max(left, 0.0) / scale);
   if (inertia) s.v = (x - s.start) / h;
   return report;

@@ -150,6 +150,72 @@ TEST(Scene, IncisionPulledOpenThenClosedBySprings) {
   EXPECT_LT(s.spring_gap_final, 0.05 * s.spring_gap_when_attached) << s.spring_gap_final << " of " << s.spring_gap_when_attached;
 }
 
+TEST(Scene, SolverModesAndScalpelsAreRead) {
+  testing::TempDir dir;
+  const std::string time = R"("time": {"dt": 0.01, "duration": 0.1})";
+  const Scene converged = load_scene(write_scene(dir.path(), std::string("{") + kCube + "," + time + "}"));
+  EXPECT_EQ(converged.step.max_cg_iterations, 0);
+  const Scene real_time = load_scene(write_scene(dir.path(), std::string("{") + kCube + "," + time + R"(, "solver": {"mode": "real_time"}})"));
+  EXPECT_EQ(real_time.step.max_newton_iterations, 1);
+  EXPECT_EQ(real_time.step.max_cg_iterations, 30);
+  const Scene budget = load_scene(
+      write_scene(dir.path(), std::string("{") + kCube + "," + time + R"(, "solver": {"mode": "real_time", "max_cg_iterations": 5}})"));
+  EXPECT_EQ(budget.step.max_cg_iterations, 5);
+  const Scene blade = load_scene(write_scene(dir.path(), std::string("{") + kCube + "," + time +
+                                                           R"(, "scalpels": [{"from": 0, "until": 1, "poses": [[0,0,0, 0,0,1], [1,0,0, 1,0,1]]}]})"));
+  ASSERT_EQ(blade.scalpels.size(), 1u);
+  EXPECT_TRUE(blade.scalpels[0].world_space);
+  const BladePose half = blade.scalpels[0].at(0.5);
+  EXPECT_EQ(half.a, Vec3(0.5, 0, 0));
+  EXPECT_EQ(half.b, Vec3(0.5, 0, 1));
+  EXPECT_NE(load_error(std::string("{") + kCube + "," + time + R"(, "scalpels": [{"from": 1, "until": 1, "poses": []}]})")
+                .find("scalpels[0].until: must come after 'from'"),
+            std::string::npos);
+  EXPECT_NE(load_error(std::string("{") + kCube + "," + time + R"(, "scalpels": [{"from": 0, "until": 1, "poses": [[0,0,0,1,1,1]]}]})")
+                .find("scalpels[0].poses: needs at least 2 poses"),
+            std::string::npos);
+  EXPECT_NE(load_error(std::string("{") + kCube + "," + time + R"(, "solver": {"mode": "fast"}})").find("'fast' is not one of converged, real_time"),
+            std::string::npos);
+}
+
+// A block hanging from its top, cut by a scalpel that crosses its front face at mid-height while
+// it swings: `depth` of its thickness, in world or rest space.
+std::string scalpel_scene(double depth, const char* space) {
+  return std::string(R"({
+    "mesh": {"grid": {"box": [0, 0, 0, 1, 1, 1], "cells": [4, 4, 4], "tets_per_cube": 5}},
+    "material": {"youngs_modulus": 1e5, "density": 100},
+    "time": {"dt": 0.01, "duration": 0.2, "output_every": 0.1},
+    "pin": [{"box": [-1, -1, 0.999, 2, 2, 2]}],
+    "scalpels": [{"from": 0.02, "until": 0.1, "space": ")") + space + R"(",
+                  "poses": [[-0.1, -0.1, 0.53, -0.1, )" + std::to_string(depth) + R"(, 0.53], [1.1, -0.1, 0.53, 1.1, )" +
+         std::to_string(depth) + R"(, 0.53]]}]})";
+}
+
+TEST(Scene, ScalpelCutsAnIncisionFollowingTheMaterial) {
+  testing::TempDir dir;
+  // Part way in: one piece, an incision on the surface; a step's strip per step while it moves.
+  const SceneSummary partial = run_scene(load_scene(write_scene(dir.path(), scalpel_scene(0.4, "world"))), dir.path() / "partial");
+  EXPECT_EQ(partial.cuts_applied, 8);  // steps 2 .. 9 of the blade's 0.08 s
+  EXPECT_EQ(partial.pieces, 1);
+  EXPECT_EQ(partial.unconverged_steps, 0);
+  EXPECT_GT(partial.tets, 320);  // tets the incision crossed got copies
+  const TriangleSurface before = read_surface(dir.path() / "partial" / "surface_0000.vtp");
+  const TriangleSurface after = read_surface(dir.path() / "partial" / "surface_0002.vtp");
+  EXPECT_GT(after.num_triangles(), before.num_triangles() + 100);  // both sides of the incision
+  // Right through: the lower half comes off and falls.
+  const SceneSummary through = run_scene(load_scene(write_scene(dir.path(), scalpel_scene(1.1, "world"))), dir.path() / "through");
+  EXPECT_EQ(through.pieces, 2);
+  EXPECT_LT(through.final_box.min[2], -0.05);  // the lower piece fell
+  // In rest space the blade ignores the swing: the same pieces.
+  const SceneSummary rest = run_scene(load_scene(write_scene(dir.path(), scalpel_scene(1.1, "rest"))), dir.path() / "rest");
+  EXPECT_EQ(rest.pieces, 2);
+  // The stages were timed: steps, and cuts while the blade moved.
+  EXPECT_GT(through.stage_seconds.step, 0);
+  EXPECT_GT(through.stage_seconds.cut, 0);
+  EXPECT_GT(through.step_ms_max, 0);
+  EXPECT_GE(through.step_ms_max, through.step_ms_median);
+}
+
 TEST(Scene, FramesLimitStopsEarly) {
   testing::TempDir dir;
   const std::string text = std::string("{") + kCube + R"(, "time": {"dt": 0.01, "duration": 1, "output_every": 0.05}})";
