@@ -83,6 +83,13 @@ struct StepOptions {
   /// Conjugate gradient iterations per Newton iteration at most; 0: as many as it takes to solve
   /// the Newton system to the accuracy the tolerance asks for.
   int max_cg_iterations = 0;
+  /// A Newton matrix serves the first iteration of at most this many consecutive dynamic steps
+  /// (1: a fresh one every iteration). Only the direction changes: energies, gradients and the
+  /// convergence test are always those of the current positions, contact and spring terms are
+  /// replaced, and a cut's changes are taken out and put in. The deformation changes little in
+  /// one step, so the direction is about as good and the step costs no element Hessians: 2
+  /// measured 20 to 30% faster steps here, with the same result (see the README).
+  int reuse_hessian = 2;
 
   /// The real-time mode: a fixed budget of work per step (one Newton iteration of at most
   /// `cg_iterations` conjugate gradient iterations by default), whatever the residual; the

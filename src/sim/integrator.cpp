@@ -23,6 +23,8 @@ namespace {
 
 // Armijo's sufficient decrease: accept t when E(x + t d) <= E(x) - kArmijo t (-g . d).
 constexpr double kArmijo = 1e-4;
+// The relative rounding of a sum of many energy terms: decreases below it cannot be seen.
+constexpr double kEnergyRounding = 1e-13;
 // Halvings of the step before the line search gives up (t = 2^-40: the limit of precision).
 constexpr int kMaxHalvings = 40;
 // The linear solve aims to leave a residual worth this share of the convergence threshold, so
@@ -67,30 +69,63 @@ struct Potential {
           block[0] += m * inertia_weight;
           block[4] += m * inertia_weight;
           block[8] += m * inertia_weight;
+          s.ledger_nodal[v] = m * inertia_weight;
         }
       }
       return energy;
     });
   }
 
-  // Contact and springs: few, so one thread; Hessian entries found by binary search.
+  // A constraint term (c c^T times d2E) added into the matrix with `sign`.
+  void add_term(const SimulatorState::ConstraintTerm& t, double sign) const {
+    for (int a = 0; a < t.count; ++a) {
+      for (int b = 0; b < t.count; ++b) {
+        double* block = s.hessian.block(s.hessian.slot(t.nodes[a], t.nodes[b]));
+        const double w = sign * t.coefficients[a] * t.coefficients[b];
+        for (int i = 0; i < 3; ++i) {
+          for (int j = 0; j < 3; ++j) block[3 * i + j] += w * t.d2E(i, j);
+        }
+      }
+    }
+  }
+
+  // Contact and springs: few, so one thread; Hessian entries found by a search of their rows,
+  // and recorded (for a later step that reuses the matrix).
   double constraints(const Points& at, std::vector<double>* g, bool hessian) const {
     double energy = 0;
+    if (hessian) s.ledger_constraints.clear();
     s.for_each_constraint(at, [&](const std::array<Index, 8>& nodes, const std::array<double, 8>& c, int count, double e,
                                   const Vec3& dE, const Mat3& d2E) {
       energy += e;
       for (int a = 0; a < count; ++a) {
         for (int i = 0; i < 3; ++i) (*g)[3 * nodes[a] + i] += c[a] * dE[i];
-        if (!hessian) continue;
-        for (int b = 0; b < count; ++b) {
-          double* block = s.hessian.block(s.hessian.slot(nodes[a], nodes[b]));
-          for (int i = 0; i < 3; ++i) {
-            for (int j = 0; j < 3; ++j) block[3 * i + j] += c[a] * c[b] * d2E(i, j);
-          }
-        }
       }
+      if (!hessian) return;
+      s.ledger_constraints.push_back({nodes, c, count, d2E});
+      add_term(s.ledger_constraints.back(), 1);
     });
     return energy;
+  }
+
+  // Reusing the matrix at `at`: the recorded mass and constraint terms out, the current ones in.
+  void replace_recorded_terms(const Points& at) const {
+    const Index n = s.num_nodes();
+    s.ledger_nodal.resize(static_cast<std::size_t>(n), 0.0);  // new nodes: nothing recorded
+    for (Index v = 0; v < n; ++v) {
+      const double now = s.mass[v] * inertia_weight, change = now - s.ledger_nodal[v];
+      double* block = s.hessian.block(s.hessian.diagonal_slot(v));
+      block[0] += change;
+      block[4] += change;
+      block[8] += change;
+      s.ledger_nodal[v] = now;
+    }
+    for (const SimulatorState::ConstraintTerm& t : s.ledger_constraints) add_term(t, -1);
+    s.ledger_constraints.clear();
+    s.for_each_constraint(at, [&](const std::array<Index, 8>& nodes, const std::array<double, 8>& c, int count, double, const Vec3&,
+                                  const Mat3& d2E) {
+      s.ledger_constraints.push_back({nodes, c, count, d2E});
+      add_term(s.ledger_constraints.back(), 1);
+    });
   }
 
   // Rayleigh stiffness damping: (damping_weight / 2) u^T K u with u = at - start and K the
@@ -119,8 +154,15 @@ struct Potential {
   // The same, and the Hessian into s.hessian.
   double evaluate_with_hessian(const Points& at, std::vector<double>* g) const {
     std::fill(g->begin(), g->end(), 0.0);
+    s.ledger_nodal.assign(static_cast<std::size_t>(s.num_nodes()), 0.0);
     double energy = s.assemble_hessian(at, g);
     energy += nodal(at, g, true) + constraints(at, g, true) + damping(at, g, true);
+    // A later step may reuse it (not with stiffness damping, whose term changes every step).
+    s.reusable = inertia && !stiffness_damping;
+    s.reusable_age = 0;
+    s.assembled_at = at;
+    s.reuse_take_out.clear();
+    s.reuse_put_in.clear();
     return energy;
   }
 };
@@ -224,8 +266,28 @@ StepReport Simulator::minimise(const StepOptions& options, bool inertia) {
     return 0.5 * bound;
   };
 
+  // The gradient's size where energies cannot tell: the bound of the decrement (dynamic steps)
+  // or the plain squared norm over the free nodes (static solves).
+  const auto gradient_measure = [&](const std::vector<double>& g) {
+    if (inertia) return decrement_bound(g);
+    double sum = 0;
+    for (std::size_t k = 0; k < size; ++k) sum += s.free[k / 3] ? g[k] * g[k] : 0.0;
+    return sum;
+  };
   StepReport report;
-  double energy = potential.evaluate_with_hessian(x, &s.current_gradient);
+  if (options.reuse_hessian < 1) throw Error(ErrorKind::kInvalidArgument, "reuse_hessian must be at least 1");
+  // The first iteration may take the matrix of an earlier step (reuse_hessian), brought up to
+  // date: a cut's elements, the mass, contact and spring terms of now.
+  bool reused = inertia && s.reusable && s.reusable_age + 1 < options.reuse_hessian && !potential.stiffness_damping;
+  double energy;
+  if (reused) {
+    s.apply_cut_to_reused_matrix();
+    energy = potential.evaluate(x, &s.current_gradient);
+    potential.replace_recorded_terms(x);
+    ++s.reusable_age;
+  } else {
+    energy = potential.evaluate_with_hessian(x, &s.current_gradient);
+  }
   bool hessian_current = true, full_step = true;
   // The best measure known of half the Newton decrement at x: the decrement itself when Newton
   // stopped there without moving, the bound from the gradient after a move (dynamic steps).
@@ -238,6 +300,7 @@ StepReport Simulator::minimise(const StepOptions& options, bool inertia) {
       report.assemble_seconds += seconds_since(t0);
     }
     hessian_current = false;
+    const bool matrix_reused = reused && iteration == 0;
     const Clock::time_point solve_start = Clock::now();
     for (std::size_t k = 0; k < size; ++k) s.rhs[k] = s.free[k / 3] ? -s.current_gradient[k] : 0.0;
     std::fill(s.direction.begin(), s.direction.end(), 0.0);
@@ -264,8 +327,10 @@ StepReport Simulator::minimise(const StepOptions& options, bool inertia) {
     for (std::size_t k = 0; k < size; ++k) decrement += s.rhs[k] * s.direction[k];
     report.newton_iterations = iteration + 1;
     if (!(decrement >= 0) || !std::isfinite(decrement)) break;  // not a descent direction: give up
-    left = decrement / 2;
-    if (decrement / 2 <= threshold) {
+    // With a reused matrix the decrement is not this step's Newton decrement: it does not end the
+    // step (the gradient bound after the step does).
+    if (!matrix_reused) left = decrement / 2;
+    if (decrement / 2 <= threshold && !matrix_reused) {
       report.converged = true;
       break;
     }
@@ -280,7 +345,12 @@ StepReport Simulator::minimise(const StepOptions& options, bool inertia) {
         for (int k = 0; k < 3; ++k) s.trial(v, k) += t * s.direction[3 * v + k];
       }
       const double trial_energy = potential.evaluate(s.trial, &s.trial_gradient);
-      if (trial_energy <= energy - kArmijo * t * decrement) {
+      // Near convergence the decrease Armijo asks for is below the rounding of the energy
+      // itself; there the gradient decides (the bound of the decrement must fall).
+      const bool within_rounding = kArmijo * t * decrement <= kEnergyRounding * std::abs(energy);
+      const bool sufficient = trial_energy <= energy - kArmijo * t * decrement ||
+                              (within_rounding && gradient_measure(s.trial_gradient) < gradient_measure(s.current_gradient));
+      if (sufficient) {
         x.swap(s.trial);
         s.current_gradient.swap(s.trial_gradient);
         energy = trial_energy;
@@ -291,7 +361,8 @@ StepReport Simulator::minimise(const StepOptions& options, bool inertia) {
     }
     full_step = t == 1;
     report.line_search_seconds += seconds_since(search_start);
-    if (!accepted) break;  // at the limit of precision
+    if (!accepted && matrix_reused) continue;  // the old matrix's direction failed: a fresh one next
+    if (!accepted) break;                      // at the limit of precision
     if (inertia) {
       left = decrement_bound(s.current_gradient);
       if (left <= threshold) {

@@ -187,6 +187,12 @@ void SimulatorState::carry_new_nodes(Index first_new_node, std::span<const Index
     target.row(first_new_node + i) = target.row(source);
     rest.row(first_new_node + i) = rest.row(source);  // a split node is where its source is, in the material
     constraint.push_back(constraint[source]);
+
+  }
+  // A reusable matrix was assembled with the sources where they were then.
+  if (assembled_at.rows() == first_new_node) {
+    assembled_at.conservativeResize(total, 3);
+    for (Index i = 0; i < static_cast<Index>(new_node_source.size()); ++i) assembled_at.row(first_new_node + i) = assembled_at.row(new_node_source[i]);
   }
   // Springs and contact points name tets and barycentric weights that a cut may change.
   contact_points.clear();
@@ -238,6 +244,8 @@ void Simulator::remesh(const Cutter& cutter, const CutBatchReport& batch) {
     rebuild(copy);
     rebuilt.push_back(copy);
   }
+  std::sort(rebuilt.begin(), rebuilt.end());
+  rebuilt.erase(std::unique(rebuilt.begin(), rebuilt.end()), rebuilt.end());
   s.compute_masses();
   s.update_after_cut(old_tets, batch.new_tet_source, batch.changed_tets, rebuilt);
 }
@@ -245,6 +253,7 @@ void Simulator::remesh(const Cutter& cutter, const CutBatchReport& batch) {
 void Simulator::set_positions(const Points& x) {
   if (x.rows() != num_nodes() || !x.allFinite()) throw Error(ErrorKind::kInvalidArgument, "positions: wrong size or not finite");
   state_->x = x;
+  state_->reusable = false;  // moved from outside (a rigid transform, say): assemble afresh
 }
 
 void Simulator::set_velocities(const Points& v) {

@@ -74,6 +74,25 @@ struct SimulatorState {
   Index blocks_at_build = 0;
   Points rest;  // per node
 
+  // Reusing the Newton matrix (StepOptions::reuse_hessian): its elastic part was assembled at
+  // `assembled_at`; the other terms in it are recorded (per node, the mass term added to the
+  // diagonal; the contact and spring terms), so that a later step takes them out and puts its
+  // own in. A cut since then leaves element contributions to take out (the old element, its
+  // slots and warm start) and to put in (positions), both at assembled_at.
+  struct ConstraintTerm {
+    std::array<Index, 8> nodes;
+    std::array<double, 8> coefficients;
+    int count;
+    Mat3 d2E;
+  };
+  bool reusable = false;
+  int reusable_age = 0;  // steps the matrix has served
+  Points assembled_at;
+  std::vector<double> ledger_nodal;
+  std::vector<ConstraintTerm> ledger_constraints;
+  std::vector<std::pair<OrderedElement, Mat3>> reuse_take_out;
+  std::vector<Index> reuse_put_in;
+
   // Scratch reused from step to step, so that a step allocates nothing once sizes settle (and
   // why a Simulator, even through const calls, is for one thread at a time).
   detail::ConjugateGradientWorkspace cg;
@@ -116,8 +135,13 @@ struct SimulatorState {
   /// copies appended since the last sort reach a quarter of the mesh.
   void update_after_cut(Index old_count, std::span<const Index> new_source, std::span<const Index> renoded,
                         std::span<const Index> rebuilt);
-  /// The pattern from scratch, with every element's slots.
+  /// The pattern from scratch, with every element's slots (a reusable matrix is lost).
   void build_pattern();
+  /// Adds sign times an element's projected Hessian at positions `at` into its slots (the
+  /// scalar kernel; for the few elements a cut changed). `v` is its warm start, updated.
+  void add_element_hessian(const Element& e, const std::array<Index, 16>& slots, Mat3* v, const Points& at, double sign);
+  /// The element contributions a cut left to take out and put in (see above).
+  void apply_cut_to_reused_matrix();
   /// Brings the pattern up to date before a step (see the members). O(pending elements and
   /// springs), or a build.
   void refresh_structure();
@@ -145,8 +169,8 @@ struct SimulatorState {
 
 template <typename Visit>
 void SimulatorState::for_each_constraint(const Points& at, Visit&& visit) const {
-  std::array<Index, 8> nodes;
-  std::array<double, 8> coefficients;
+  std::array<Index, 8> nodes{};
+  std::array<double, 8> coefficients{};
   for (const EmbeddedPoint& point : contact_points) {
     Vec3 y = Vec3::Zero();
     for (int k = 0; k < 4; ++k) {

@@ -161,7 +161,7 @@ void SimulatorState::update_after_cut(Index old_count, std::span<const Index> ne
   if (colors_past_64 || 4 * (appended_since_order + count - old_count) > count) {
     // Many copies appended since the last spatial sort (or colours past the fast path's 64):
     // sort again and start over, O(T log T) once in a while.
-    order_from_scratch(rest);
+    order_from_scratch(rest);  // and the pattern is built again: no matrix to reuse
     return;
   }
   // Clusters whose nodes change: those holding a re-noded element, and the last one when new
@@ -178,6 +178,13 @@ void SimulatorState::update_after_cut(Index old_count, std::span<const Index> ne
     }
   }
   node_colors.resize(static_cast<std::size_t>(num_nodes()), 0);
+  // A reusable Newton matrix holds the rebuilt elements as they were: they come out of it, and
+  // go back in as they are now, with the new copies (after the pattern has their slots).
+  if (reusable) {
+    for (const Index id : rebuilt) {
+      if (id < old_count) reuse_take_out.emplace_back(ordered[element_position[id]], ordered_v[element_position[id]]);
+    }
+  }
   // Changed elements in place; new copies appended, each with its source's warm start.
   for (const Index id : rebuilt) {
     if (id < old_count) ordered[element_position[id]].element = elements[id];
@@ -192,6 +199,12 @@ void SimulatorState::update_after_cut(Index old_count, std::span<const Index> ne
     pattern_pending.push_back(pos);
   }
   for (const Index id : renoded) pattern_pending.push_back(element_position[id]);
+  if (reusable) {
+    for (const Index id : rebuilt) {
+      if (id < old_count) reuse_put_in.push_back(element_position[id]);
+    }
+    for (Index id = old_count; id < count; ++id) reuse_put_in.push_back(element_position[id]);
+  }
   appended_since_order += count - old_count;
   const Index old_clusters = static_cast<Index>(cluster_color.size());
   cluster_color.resize(static_cast<std::size_t>(num_clusters()), 0);
@@ -229,6 +242,9 @@ void SimulatorState::build_pattern() {
   for (std::size_t pos = 0; pos < ordered.size(); ++pos) ordered[pos].slots = slots[pos];
   blocks_at_build = hessian.num_blocks();
   pattern_rebuild = false;
+  reusable = false;  // the values are gone
+  reuse_take_out.clear();
+  reuse_put_in.clear();
   springs_pending = false;
   pattern_pending.clear();
 }
@@ -259,6 +275,31 @@ void SimulatorState::refresh_structure() {
     }
     springs_pending = false;
   }
+}
+
+void SimulatorState::add_element_hessian(const Element& e, const std::array<Index, 16>& slots, Mat3* warm, const Points& at, double sign) {
+  Mat3 P;
+  detail::HessianFactor q;
+  detail::element_hessian_factor(material.model, parameters, detail::deformation_gradient(e.weights, at.data(), e.nodes), e.weights,
+                                 e.volume, warm, &P, &q);
+  for (int a = 0; a < 4; ++a) {
+    for (int b = 0; b < 4; ++b) {
+      double block[9];
+      detail::factor_block(q, a, b, block);
+      double* out = hessian.block(slots[4 * a + b]);
+      for (int k = 0; k < 9; ++k) out[k] += sign * block[k];
+    }
+  }
+}
+
+void SimulatorState::apply_cut_to_reused_matrix() {
+  for (auto& [old, warm] : reuse_take_out) add_element_hessian(old.element, old.slots, &warm, assembled_at, -1);
+  for (const Index pos : reuse_put_in) {
+    Mat3 warm = ordered_v[pos];
+    add_element_hessian(ordered[pos].element, ordered[pos].slots, &warm, assembled_at, 1);
+  }
+  reuse_take_out.clear();
+  reuse_put_in.clear();
 }
 
 }  // namespace tetcut::sim
