@@ -4,6 +4,7 @@
 //   tetcut::sim::Simulator sim(result.mesh.mesh, material, fractions);  // fractions: per tet copy
 //   sim.pin(node);
 //   for (...) sim.step(options);                                        // backward Euler
+//   sim.remesh(cutter, cutter.cut(blade));                              // after each cut batch
 //
 // Each tet copy of a cut mesh is a whole tet holding part of its material: its mass and elastic
 // energy are scaled by its material volume fraction, floored at kMinVolumeFraction so that a copy
@@ -75,7 +76,8 @@ struct StepOptions {
   int max_newton_iterations = 30;
   /// Newton stops when half the Newton decrement (the energy the step still expects to gain) is
   /// below tolerance^2 times the kinetic energy scale M (L / dt)^2, L the mesh's size: a step
-  /// whose positions are settled to about tolerance * L. For a dynamic step the test is also
+  /// whose positions are settled to about tolerance * L in the mass-weighted mean (a single node
+  /// may be a few times further). For a dynamic step the test is also
   /// passed, with no further solve, when an upper bound of the decrement from the gradient
   /// (dt^2 g^T M^-1 g, as the Hessian is at least M / dt^2) is below it.
   double tolerance = 1e-7;
@@ -92,13 +94,15 @@ struct StepOptions {
   int reuse_hessian = 2;
 
   /// The real-time mode: a fixed budget of work per step (one Newton iteration of at most
-  /// `cg_iterations` conjugate gradient iterations by default), whatever the residual; the
-  /// report's `residual` says what the budget left. See the README for what it costs in accuracy.
-  static StepOptions real_time(double dt, int newton_iterations = 1, int cg_iterations = 30) {
+  /// `cg_iterations` conjugate gradient iterations by default, with a fresh Newton matrix every
+  /// `reuse` steps), whatever the residual; the report's `residual` says what the budget left.
+  /// See the README for what it costs in accuracy.
+  static StepOptions real_time(double dt, int newton_iterations = 1, int cg_iterations = 30, int reuse = 4) {
     StepOptions o;
     o.dt = dt;
     o.max_newton_iterations = newton_iterations;
     o.max_cg_iterations = cg_iterations;
+    o.reuse_hessian = reuse;
     return o;
   }
 };
@@ -108,10 +112,11 @@ struct StepReport {
   int cg_iterations = 0;      ///< conjugate gradient iterations, over all Newton iterations
   bool converged = false;
   double energy = 0;  ///< the incremental potential at the end of the step
-  /// How far from converged the step ended, in the units of StepOptions::tolerance (converged
-  /// when it is at most the tolerance): sqrt(bound / (M (L / dt)^2)) for the bound of half the
-  /// Newton decrement at the end positions (dynamic steps), or the last half decrement measured
-  /// (static solves).
+  /// How far from converged the step ended, in the units of StepOptions::tolerance (a converged
+  /// step's is at most the tolerance): sqrt(d / (M (L / dt)^2)) for the best measure d known of
+  /// half the Newton decrement at the end positions: the decrement itself when Newton stopped
+  /// there without moving, otherwise (dynamic steps) the bound from the gradient, or (static
+  /// solves) the last decrement measured.
   double residual = 0;
   /// Wall time of the step's stages in seconds: element energies, stresses and Hessians with
   /// their assembly; the linear solves; the line search (energies and gradients of trial points).

@@ -134,18 +134,22 @@ void Cutter::set_current(const Points& nodes) {
   if (!nodes.allFinite()) throw Error(ErrorKind::kInvalidInput, "deformed positions: a coordinate is not finite");
   for (Index n = 0; n < num_nodes(); ++n) s.current[n] = nodes.row(n).transpose();
   s.planes.forget_pulled_back();
-  std::vector<spatial::Aabb> boxes(static_cast<std::size_t>(s.copies.num_copies()));
-  tbb::parallel_for(tbb::blocked_range<Index>(0, s.copies.num_copies(), 4096), [&](const auto& range) {
-    for (Index c = range.begin(); c != range.end(); ++c) boxes[c] = s.current_box(c);
-  });
-  // Refit while the tree covers most copies; rebuild when many were made since it was built.
-  if (s.current_copies.size() > 0 && s.copies_since_set.size() * 16 < static_cast<std::size_t>(s.current_copies.size())) {
-    std::vector<spatial::Aabb> fitted(boxes.begin(), boxes.begin() + s.current_copies.size());
-    s.current_copies.refit(std::move(fitted));
-    s.copies_since_set.erase(std::remove_if(s.copies_since_set.begin(), s.copies_since_set.end(),
-                                            [&](Index c) { return c < s.current_copies.size(); }),
+  // Refit while the tree covers most copies (in place: a live session calls this every frame);
+  // rebuild when many were made since it was built.
+  const Index in_tree = s.current_copies.size();
+  if (in_tree > 0 && s.copies_since_set.size() * 16 < static_cast<std::size_t>(in_tree)) {
+    std::vector<spatial::Aabb>& boxes = s.current_copies.mutable_boxes();
+    tbb::parallel_for(tbb::blocked_range<Index>(0, in_tree, 4096), [&](const auto& range) {
+      for (Index c = range.begin(); c != range.end(); ++c) boxes[c] = s.current_box(c);
+    });
+    s.current_copies.refit();
+    s.copies_since_set.erase(std::remove_if(s.copies_since_set.begin(), s.copies_since_set.end(), [&](Index c) { return c < in_tree; }),
                              s.copies_since_set.end());
   } else {
+    std::vector<spatial::Aabb> boxes(static_cast<std::size_t>(s.copies.num_copies()));
+    tbb::parallel_for(tbb::blocked_range<Index>(0, s.copies.num_copies(), 4096), [&](const auto& range) {
+      for (Index c = range.begin(); c != range.end(); ++c) boxes[c] = s.current_box(c);
+    });
     s.current_copies = spatial::BoxTree(std::move(boxes));
     s.copies_since_set.clear();
   }

@@ -74,9 +74,9 @@ double by_color(const SimulatorState& s, const Body& body) {
 }  // namespace
 
 double SimulatorState::elastic_gradient(const Points& at, std::vector<double>* gradient) const {
-  // Corotated's stress needs an SVD per element: four at a time in the lane kernel, as for the
-  // Hessian. Stable Neo-Hookean's is a few products, scalar.
-  const bool lanes = material.model == Model::kCorotated && detail::element_lanes_available();
+  // Four at a time in the lane kernel, as for the Hessian (corotated's stress needs an SVD per
+  // element; stable Neo-Hookean's none, and the kernel skips it).
+  const bool lanes = detail::element_lanes_available();
   const detail::LaneMaterial lane_material = lane_parameters();
   return by_color(*this, [&](Index begin, Index end) {
     double energy = 0;

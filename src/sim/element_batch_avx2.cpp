@@ -72,33 +72,16 @@ void swap_columns(LaneMatrix* a, int i, int j, const Mask& swap) {
   }
 }
 
-}  // namespace
-
-void element_hessian_lanes(const LaneMaterial& p, LaneBatch* io, int count) {
-  // Pack: lanes past `count` repeat lane 0 (valid data; their results are dropped).
-  LaneMatrix F, V;
-  Lanes w[4][3], volume;
-  for (int lane = 0; lane < kLanes; ++lane) {
-    const int from = lane < count ? lane : 0;
-    for (int r = 0; r < 3; ++r) {
-      for (int c = 0; c < 3; ++c) {
-        F.m[r][c][lane] = io->F[from][3 * r + c];
-        V.m[r][c][lane] = io->V[from][3 * r + c];
-      }
-    }
-    for (int a = 0; a < 4; ++a) {
-      for (int c = 0; c < 3; ++c) w[a][c][lane] = io->weights[from][3 * a + c];
-    }
-    volume[lane] = io->volume[from];
-  }
-  const double tolerance = p.svd_tolerance;
-
-  // The rotation-variant SVD as in svd3: one-sided Jacobi on B = (F / scale) V.
+// The rotation-variant SVD as in svd3, lane by lane: one-sided Jacobi on B = (F / scale) V, V
+// warm-started. Lanes it cannot take (zero, non-finite or rank-one F) are marked in `fallback`.
+void lane_svd(const LaneMatrix& F, double tolerance, LaneMatrix* V_io, LaneMatrix* U_out, Lanes* sigma_out, Mask* fallback_io) {
+  LaneMatrix& V = *V_io;
+  Mask& fallback = *fallback_io;
   Lanes scale = broadcast(0);
   for (int r = 0; r < 3; ++r) {
     for (int c = 0; c < 3; ++c) scale = max(scale, abs(F.m[r][c]));
   }
-  Mask fallback = !(scale > 0 && scale < std::numeric_limits<double>::infinity());
+  fallback = fallback || !(scale > 0 && scale < std::numeric_limits<double>::infinity());
   const Lanes inverse = select(fallback, broadcast(1), 1 / scale);
   LaneMatrix B;
   for (int r = 0; r < 3; ++r) {
@@ -156,13 +139,48 @@ void element_hessian_lanes(const LaneMaterial& p, LaneBatch* io, int count) {
   const Lanes s1_safe = select(fallback, broadcast(1), s1);
   for (int r = 0; r < 3; ++r) u1.v[r] = c1.v[r] / s1_safe;
   const LaneVector u2 = cross(u0, u1);
-  LaneMatrix U;
+  LaneMatrix& U = *U_out;
   for (int r = 0; r < 3; ++r) {
     U.m[r][0] = u0.v[r];
     U.m[r][1] = u1.v[r];
     U.m[r][2] = u2.v[r];
   }
-  const Lanes sigma[3] = {scale * s0, scale * s1, scale * dot(u2, b2)};
+  sigma_out[0] = scale * s0;
+  sigma_out[1] = scale * s1;
+  sigma_out[2] = scale * dot(u2, b2);
+
+}
+
+}  // namespace
+
+void element_hessian_lanes(const LaneMaterial& p, LaneBatch* io, int count) {
+  // Pack: lanes past `count` repeat lane 0 (valid data; their results are dropped).
+  LaneMatrix F, V;
+  Lanes w[4][3], volume;
+  for (int lane = 0; lane < kLanes; ++lane) {
+    const int from = lane < count ? lane : 0;
+    for (int r = 0; r < 3; ++r) {
+      for (int c = 0; c < 3; ++c) {
+        F.m[r][c][lane] = io->F[from][3 * r + c];
+        V.m[r][c][lane] = io->V[from][3 * r + c];
+      }
+    }
+    for (int a = 0; a < 4; ++a) {
+      for (int c = 0; c < 3; ++c) w[a][c][lane] = io->weights[from][3 * a + c];
+    }
+    volume[lane] = io->volume[from];
+  }
+  const double tolerance = p.svd_tolerance;
+
+  // The SVD: for corotated's polar rotation, or for the Hessian's eigensystem; stable
+  // Neo-Hookean's energy and stress need none.
+  Mask fallback = F.m[0][0] != F.m[0][0];  // all false
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) fallback = fallback || !(abs(F.m[r][c]) < std::numeric_limits<double>::infinity());
+  }
+  LaneMatrix U;
+  Lanes sigma[3] = {broadcast(0), broadcast(0), broadcast(0)};
+  if (p.corotated || io->with_hessian) lane_svd(F, tolerance, &V, &U, sigma, &fallback);
 
   // Energy density and stress.
   LaneMatrix cofactor;

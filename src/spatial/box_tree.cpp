@@ -74,6 +74,10 @@ void BoxTree::query(const Aabb& query, std::vector<Index>* out) const {
 
 void BoxTree::refit(std::vector<Aabb> boxes) {
   boxes_ = std::move(boxes);
+  refit();
+}
+
+void BoxTree::refit() {
   if (!nodes_.empty()) refit_node(0);
 }
 

@@ -37,6 +37,10 @@ class BoxTree {
   /// Replaces the boxes (same count, same order) and recomputes the node boxes bottom-up,
   /// keeping the hierarchy: O(n), for boxes that move a little (a deforming mesh).
   void refit(std::vector<Aabb> boxes);
+  /// The same in place: write the new boxes into mutable_boxes() (same count, same order), then
+  /// refit(). Nothing is allocated.
+  std::vector<Aabb>& mutable_boxes() { return boxes_; }
+  void refit();
 
   Index size() const { return static_cast<Index>(boxes_.size()); }
 
