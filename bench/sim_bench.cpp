@@ -13,7 +13,8 @@
 //    scaled to the lattice spacing as in tetcut_bench_progressive (1.5 spacings long, 0.3 per
 //    step, rows 2.1 apart), so that every batch crosses fresh tets, a similar number at both sizes.
 //
-// Usage: tetcut_bench_sim [--small]   (--small: the 11.5k mesh only)
+// Usage: tetcut_bench_sim [--small | --large] [--steps | --scalpel]
+//   --small / --large: the 11.5k or the 114k mesh only; --steps / --scalpel: that part only.
 
 #include <tetcut/blade.hpp>
 #include <tetcut/cutter.hpp>
@@ -189,12 +190,23 @@ void scalpel(const Block& block, const tetcut::sim::StepOptions& options, const 
 }  // namespace
 
 int main(int argc, char** argv) {
-  const bool small = argc > 1 && std::strcmp(argv[1], "--small") == 0;
+  bool small = true, large = true, run_steps = true, run_scalpel = true;
+  for (int i = 1; i < argc; ++i) {
+    if (std::strcmp(argv[i], "--small") == 0) large = false;
+    else if (std::strcmp(argv[i], "--large") == 0) small = false;
+    else if (std::strcmp(argv[i], "--steps") == 0) run_scalpel = false;
+    else if (std::strcmp(argv[i], "--scalpel") == 0) run_steps = false;
+    else {
+      std::fprintf(stderr, "usage: %s [--small | --large] [--steps | --scalpel]\n", argv[0]);
+      return 2;
+    }
+  }
   std::vector<Block> blocks;
   for (const double h : {0.136, 0.0624}) {
-    if (small && h < 0.1) continue;
+    if ((h > 0.1 && !small) || (h < 0.1 && !large)) continue;
     blocks.push_back({h, tetcut::make_bcc(tetcut::Box{Vec3(0, 0, 0), Vec3(1, 1, 2)}, h)});
   }
+  if (run_steps) {
   std::printf("Steps from rest (30 in a row): median and 90th percentile ms per step; stage medians (assemble / solve / line "
               "search) ms; Newton and CG iterations per step; the largest residual left; tip sag after 30 steps (relative to "
               "the converged run's)\n\n");
@@ -203,6 +215,8 @@ int main(int argc, char** argv) {
     steps(b, tetcut::sim::Model::kStableNeoHookean, "stable Neo-Hookean");
     steps(b, tetcut::sim::Model::kCorotated, "corotated");
   }
+  }
+  if (!run_scalpel) return 0;
   std::printf("\nScalpel loop (60 frames, each: follow the blade, cut 10 triangles, surface, remesh, one step): ms per frame, "
               "median and 99th percentile, and per stage (median / p99)\n\n");
   std::printf("| Mesh | Step mode | Median | p99 | Cut | Surface | Remesh | Step | Tets touched |\n|---|---|---|---|---|---|---|---|---|\n");
@@ -210,6 +224,7 @@ int main(int argc, char** argv) {
     tetcut::sim::StepOptions converged;
     converged.dt = 0.01;
     scalpel(b, tetcut::sim::StepOptions::real_time(0.01), "real time");
+    scalpel(b, tetcut::sim::StepOptions::real_time(0.01, 1, 10), "real time, 10 CG");
     scalpel(b, converged, "converged");
   }
   return 0;
