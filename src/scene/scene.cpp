@@ -286,6 +286,7 @@ Scene load_scene(const std::filesystem::path& path) {
       scene.step.max_newton_iterations = budget.max_newton_iterations;
       scene.step.max_cg_iterations = budget.max_cg_iterations;
       scene.step.reuse_hessian = budget.reuse_hessian;
+      scene.step.single_precision_matrix = budget.single_precision_matrix;
     }
     if (const auto v = solver->get("tolerance")) scene.step.tolerance = v->positive();
     if (const auto v = solver->get("max_newton_iterations")) scene.step.max_newton_iterations = v->integer(1);

@@ -150,14 +150,8 @@ void scatter_blocks(const std::array<Index, 16>& slots, const double (&blocks)[1
   int b = 0;
   for (int r = 0; r < 4; ++r) {
     for (int c = r; c < 4; ++c, ++b) {
-      const double* block = blocks[b];
-      double* upper = hessian->block(slots[4 * r + c]);
-      for (int k = 0; k < 9; ++k) upper[k] += block[k];
-      if (c == r) continue;
-      double* lower = hessian->block(slots[4 * c + r]);
-      for (int y = 0; y < 3; ++y) {
-        for (int z = 0; z < 3; ++z) lower[3 * z + y] += block[3 * y + z];
-      }
+      hessian->add(slots[4 * r + c], blocks[b]);
+      if (c != r) hessian->add_transposed(slots[4 * c + r], blocks[b]);
     }
   }
 }
@@ -179,9 +173,9 @@ double SimulatorState::assemble_hessian(const Points& at, std::vector<double>* g
       // waiting on these cache misses at 100k tets).
       for (int lane = 0; lane < group; ++lane) {
         for (const Index slot : ordered[i + lane].slots) {
-          const double* block = hessian.block(slot);
+          const char* block = static_cast<const char*>(hessian.address(slot));
           __builtin_prefetch(block, 1);
-          __builtin_prefetch(block + 8, 1);
+          __builtin_prefetch(block + 64, 1);
         }
       }
       if (lanes) detail::element_hessian_lanes(lane_material, &batch, group);

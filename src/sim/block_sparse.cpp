@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <limits>
+#include <type_traits>
 
 namespace tetcut::sim::detail {
 namespace {
@@ -91,10 +92,33 @@ void BlockSparseMatrix::build(Index num_nodes, std::span<const std::array<Index,
       }
     }
   });
-  values_.assign(9 * columns_.size(), 0.0);
   added_.assign(static_cast<std::size_t>(num_nodes), {});
   added_columns_.clear();
+  values_.clear();
+  single_values_.clear();
   added_values_.clear();
+  single_added_values_.clear();
+  resize_values();
+}
+
+void BlockSparseMatrix::resize_values() {
+  if (single_) {
+    single_values_.resize(9 * columns_.size(), 0.0f);
+    single_added_values_.resize(9 * added_columns_.size(), 0.0f);
+  } else {
+    values_.resize(9 * columns_.size(), 0.0);
+    added_values_.resize(9 * added_columns_.size(), 0.0);
+  }
+}
+
+void BlockSparseMatrix::set_single_precision(bool single) {
+  if (single == single_) return;
+  single_ = single;
+  values_ = {};
+  single_values_ = {};
+  added_values_ = {};
+  single_added_values_ = {};
+  resize_values();
 }
 
 void BlockSparseMatrix::add_rows(Index count) {
@@ -111,7 +135,7 @@ Index BlockSparseMatrix::find_or_add(Index row, Index column) {
   if (found >= 0) return found;
   const Index k = num_blocks();
   added_columns_.push_back(column);
-  added_values_.resize(added_values_.size() + 9, 0.0);
+  resize_values();
   added_[row].push_back(k);
   return k;
 }
@@ -127,15 +151,30 @@ Index BlockSparseMatrix::slot(Index row, Index column) const {
 void BlockSparseMatrix::set_zero() {
   std::fill(values_.begin(), values_.end(), 0.0);
   std::fill(added_values_.begin(), added_values_.end(), 0.0);
+  std::fill(single_values_.begin(), single_values_.end(), 0.0f);
+  std::fill(single_added_values_.begin(), single_added_values_.end(), 0.0f);
 }
 
 void BlockSparseMatrix::add_scaled(const BlockSparseMatrix& other, double weight) {
-  for (std::size_t k = 0; k < values_.size(); ++k) values_[k] += weight * other.values_[k];
-  for (std::size_t k = 0; k < added_values_.size(); ++k) added_values_[k] += weight * other.added_values_[k];
+  const auto scaled = [weight](auto& to, const auto& from) {
+    using Value = typename std::decay_t<decltype(to)>::value_type;
+    for (std::size_t k = 0; k < to.size(); ++k) to[k] = static_cast<Value>(to[k] + weight * from[k]);
+  };
+  scaled(values_, other.values_);
+  scaled(added_values_, other.added_values_);
+  scaled(single_values_, other.single_values_);
+  scaled(single_added_values_, other.single_added_values_);
 }
 
 double BlockSparseMatrix::multiply_rows(Index begin, Index end, const double* x, double* y, const std::uint8_t* free) const {
-  const auto add = [&](const double* b, const double* in, double* sums) {
+  return single_ ? multiply_rows_stored(begin, end, x, y, free, single_values_.data(), single_added_values_.data())
+                 : multiply_rows_stored(begin, end, x, y, free, values_.data(), added_values_.data());
+}
+
+template <typename Value>
+double BlockSparseMatrix::multiply_rows_stored(Index begin, Index end, const double* x, double* y, const std::uint8_t* free,
+                                               const Value* built_values, const Value* added_values) const {
+  const auto add = [&](const Value* b, const double* in, double* sums) {
     sums[0] += b[0] * in[0] + b[1] * in[1] + b[2] * in[2];
     sums[1] += b[3] * in[0] + b[4] * in[1] + b[5] * in[2];
     sums[2] += b[6] * in[0] + b[7] * in[1] + b[8] * in[2];
@@ -151,12 +190,12 @@ double BlockSparseMatrix::multiply_rows(Index begin, Index end, const double* x,
     double sums[3] = {0, 0, 0};
     if (r < built) {
       for (Index k = row_start_[r]; k < row_start_[r + 1]; ++k) {
-        add(values_.data() + 9 * static_cast<std::size_t>(k), x + 3 * static_cast<std::size_t>(columns_[k]), sums);
+        add(built_values + 9 * static_cast<std::size_t>(k), x + 3 * static_cast<std::size_t>(columns_[k]), sums);
       }
     }
     for (const Index k : added_[r]) {
       const std::size_t a = static_cast<std::size_t>(k - static_cast<Index>(columns_.size()));
-      add(added_values_.data() + 9 * a, x + 3 * static_cast<std::size_t>(added_columns_[a]), sums);
+      add(added_values + 9 * a, x + 3 * static_cast<std::size_t>(added_columns_[a]), sums);
     }
     out[0] = sums[0];
     out[1] = sums[1];
@@ -205,7 +244,11 @@ ConjugateGradientReport conjugate_gradients(const BlockSparseMatrix& a, std::spa
   const std::uint8_t* is_free = free.data();
   // Preconditioner, and r = b - A d with the start's residual measures.
   for_chunks(n, kNodeChunk, [&](Index begin, Index end, Index) {
-    for (Index v = begin; v < end; ++v) w->inverse_diagonal[v] = inverse_block(a.block(a.diagonal_slot(v)));
+    double block[9];
+    for (Index v = begin; v < end; ++v) {
+      a.read(a.diagonal_slot(v), block);
+      w->inverse_diagonal[v] = inverse_block(block);
+    }
   });
   a.multiply(d.data(), w->q.data(), is_free);
   struct Sums {

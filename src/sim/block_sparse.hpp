@@ -88,14 +88,46 @@ class BlockSparseMatrix {
     }
     for (const Index k : added_[row]) visit(k, added_columns_[k - static_cast<Index>(columns_.size())]);
   }
-  /// Block `slot`, 9 values in row-major order.
-  double* block(Index slot) {
-    const auto built = static_cast<Index>(columns_.size());
-    return slot < built ? values_.data() + 9 * static_cast<std::size_t>(slot) : added_values_.data() + 9 * static_cast<std::size_t>(slot - built);
+  /// How the blocks are stored: in double, or in single precision (half the memory the products
+  /// stream; for the real-time mode, whose budget leaves residuals far above float rounding).
+  /// Changing it zeroes the values.
+  void set_single_precision(bool single);
+  bool single_precision() const { return single_; }
+
+  /// Block `slot` += scale * m (9 values, row-major), or its transpose.
+  void add(Index slot, const double* m, double scale = 1) {
+    if (single_) {
+      add_to(f_values(slot), m, scale);
+    } else {
+      add_to(d_values(slot), m, scale);
+    }
   }
-  const double* block(Index slot) const { return const_cast<BlockSparseMatrix*>(this)->block(slot); }
+  void add_transposed(Index slot, const double* m) {
+    const double t[9] = {m[0], m[3], m[6], m[1], m[4], m[7], m[2], m[5], m[8]};
+    add(slot, t);
+  }
+  /// Adds `value` to the three diagonal entries of row `row`'s diagonal block.
+  void add_to_diagonal(Index row, double value) {
+    const double m[9] = {value, 0, 0, 0, value, 0, 0, 0, value};
+    add(diagonal_slot(row), m);
+  }
+  /// Block `slot` into `out` (9 values, row-major).
+  void read(Index slot, double* out) const {
+    if (single_) {
+      const float* v = const_cast<BlockSparseMatrix*>(this)->f_values(slot);
+      for (int k = 0; k < 9; ++k) out[k] = v[k];
+    } else {
+      const double* v = const_cast<BlockSparseMatrix*>(this)->d_values(slot);
+      for (int k = 0; k < 9; ++k) out[k] = v[k];
+    }
+  }
+  /// Where block `slot` is (for prefetching).
+  const void* address(Index slot) const {
+    auto* self = const_cast<BlockSparseMatrix*>(this);
+    return single_ ? static_cast<const void*>(self->f_values(slot)) : static_cast<const void*>(self->d_values(slot));
+  }
   void set_zero();
-  /// this += weight * other, for a matrix with the same pattern (a copy of this one).
+  /// this += weight * other, for a matrix with the same pattern and precision (a copy of this one).
   void add_scaled(const BlockSparseMatrix& other, double weight);
 
   /// y = A x restricted to the nodes with free[n] != 0 (y is 0 at the others, and x is read as 0
@@ -105,15 +137,37 @@ class BlockSparseMatrix {
   double multiply_rows(Index begin, Index end, const double* x, double* y, const std::uint8_t* free) const;
 
  private:
+  template <typename Value>
+  static void add_to(Value* v, const double* m, double scale) {
+    for (int k = 0; k < 9; ++k) v[k] = static_cast<Value>(v[k] + scale * m[k]);
+  }
+  template <typename Value>
+  double multiply_rows_stored(Index begin, Index end, const double* x, double* y, const std::uint8_t* free, const Value* built,
+                              const Value* added) const;
+  double* d_values(Index slot) {
+    const auto built = static_cast<Index>(columns_.size());
+    return slot < built ? values_.data() + 9 * static_cast<std::size_t>(slot) : added_values_.data() + 9 * static_cast<std::size_t>(slot - built);
+  }
+  float* f_values(Index slot) {
+    const auto built = static_cast<Index>(columns_.size());
+    return slot < built ? single_values_.data() + 9 * static_cast<std::size_t>(slot)
+                        : single_added_values_.data() + 9 * static_cast<std::size_t>(slot - built);
+  }
+  // 9 values per slot, of the build and of the blocks added since; only the arrays of the
+  // precision in use are allocated.
+  void resize_values();
+  bool single_ = false;
   Index built_rows() const { return static_cast<Index>(row_start_.size()) - 1; }
   // The build: compressed rows.
   std::vector<Index> row_start_{0};
   std::vector<Index> columns_;
   std::vector<double> values_;
+  std::vector<float> single_values_;
   // Blocks added since, by row; their slots follow the build's.
   std::vector<std::vector<Index>> added_;
   std::vector<Index> added_columns_;
   std::vector<double> added_values_;
+  std::vector<float> single_added_values_;
   std::vector<Index> diagonal_;
 };
 

@@ -286,8 +286,7 @@ void SimulatorState::add_element_hessian(const Element& e, const std::array<Inde
     for (int b = 0; b < 4; ++b) {
       double block[9];
       detail::factor_block(q, a, b, block);
-      double* out = hessian.block(slots[4 * a + b]);
-      for (int k = 0; k < 9; ++k) out[k] += sign * block[k];
+      hessian.add(slots[4 * a + b], block, sign);
     }
   }
 }

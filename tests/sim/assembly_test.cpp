@@ -93,7 +93,8 @@ TEST_P(Assembly, HessianIsTheGradientsDerivativeAndPositiveSemiDefinite) {
     Eigen::MatrixXd H = Eigen::MatrixXd::Zero(3 * n, 3 * n);
     for (Index row = 0; row < n; ++row) {
       s.hessian.for_each_block(row, [&](Index k, Index column) {
-        const double* b = s.hessian.block(k);
+        double b[9];
+        s.hessian.read(k, b);
         for (int i = 0; i < 3; ++i) {
           for (int j = 0; j < 3; ++j) H(3 * row + i, 3 * column + j) = b[3 * i + j];
         }

@@ -461,6 +461,27 @@ TEST_P(Integrator, RealTimeBudgetReportsWhatItLeft) {
   EXPECT_GT(std::abs(small_tip - converged_tip), std::abs(large_tip - converged_tip));
 }
 
+TEST_P(Integrator, RealTimeStepsInSinglePrecisionMatchDouble) {
+  // A block big enough that the real-time mode stores its Newton matrix in single precision
+  // (past 8 MB): the same motion as with the matrix in double, to the budget's own accuracy.
+  const TetMesh block = make_bcc(Box{Vec3(0, 0, 0), Vec3(1, 1, 2)}, 0.072);
+  ASSERT_GT(block.num_tets(), 60000);
+  const auto run = [&](bool single) {
+    Material material;
+    material.model = GetParam();
+    Simulator sim(block, material);
+    pin_top(block, &sim);
+    StepOptions options = StepOptions::real_time(0.01);
+    options.single_precision_matrix = single;
+    for (int s = 0; s < 6; ++s) sim.step(options);
+    return sim.positions();
+  };
+  const Points single = run(true), twice = run(false);
+  const double size = (block.rest().colwise().maxCoeff() - block.rest().colwise().minCoeff()).norm();
+  EXPECT_LT((single - twice).cwiseAbs().maxCoeff(), 1e-6 * size);
+  EXPECT_GT((single - twice).cwiseAbs().maxCoeff(), 0.0);  // single precision was used
+}
+
 TEST_P(Integrator, AConvergedStepIsSettledToTheTolerance) {
   // The default tolerance promises a step's positions settled to about 1e-7 of the mesh's size,
   // in the mass-weighted mean (the test bounds half the Newton decrement by tolerance^2 M (L /
