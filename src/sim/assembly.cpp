@@ -126,16 +126,17 @@ detail::LaneMaterial SimulatorState::lane_parameters() const {
 void SimulatorState::pack(const Points& at, Index first, int count, detail::LaneBatch* batch) const {
   for (int lane = 0; lane < count; ++lane) {
     const Element& el = ordered[first + lane].element;
-    const Mat3 F = detail::deformation_gradient(el.weights, at.data(), el.nodes);
-    const Mat3& V = ordered_v[first + lane];
-    for (int r = 0; r < 3; ++r) {
-      for (int k = 0; k < 3; ++k) {
-        batch->F[lane][3 * r + k] = F(r, k);
-        batch->V[lane][3 * r + k] = V(r, k);
-      }
-    }
+    // The weights and V are stored as the kernel reads them; F = sum_a x_a w_a^T straight into it.
+    const double* w = el.weights.data();
+    std::copy(w, w + 12, batch->weights[lane]);
+    std::copy(ordered_v[first + lane].data(), ordered_v[first + lane].data() + 9, batch->V[lane]);
+    double* F = batch->F[lane];
+    std::fill(F, F + 9, 0.0);
     for (int a = 0; a < 4; ++a) {
-      for (int k = 0; k < 3; ++k) batch->weights[lane][3 * a + k] = el.weights(a, k);
+      const double* node = at.data() + 3 * static_cast<std::size_t>(el.nodes[a]);
+      for (int r = 0; r < 3; ++r) {
+        for (int c = 0; c < 3; ++c) F[3 * r + c] += node[r] * w[3 * a + c];
+      }
     }
     batch->volume[lane] = el.volume;
     batch->fallback[lane] = true;
@@ -196,7 +197,7 @@ double SimulatorState::assemble_hessian(const Points& at, std::vector<double>* g
             for (int col = r; col < 4; ++col) detail::factor_block(q, r, col, batch.blocks[lane][b++]);
           }
         } else {
-          for (int k = 0; k < 9; ++k) V(k / 3, k % 3) = batch.V[lane][k];
+          std::copy(batch.V[lane], batch.V[lane] + 9, V.data());
         }
         energy += el.volume * batch.energy[lane];
         scatter(el.nodes, Eigen::Map<const detail::Vec12>(batch.gradient[lane]), gradient->data());

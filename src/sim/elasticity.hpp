@@ -25,8 +25,9 @@ namespace tetcut::sim::detail {
 using Vec9 = Eigen::Matrix<double, 9, 1>;
 using Vec12 = Eigen::Matrix<double, 12, 1>;
 using Mat12 = Eigen::Matrix<double, 12, 12>;
-/// dF/dx of a tet: F = sum_a x_a w_a^T, row a is w_a.
-using ShapeWeights = Eigen::Matrix<double, 4, 3>;
+/// dF/dx of a tet: F = sum_a x_a w_a^T, row a is w_a (stored row by row, as the lane kernel
+/// reads it).
+using ShapeWeights = Eigen::Matrix<double, 4, 3, Eigen::RowMajor>;
 
 /// Corotated's twist eigenvalue has 4 mu / (sigma_i + sigma_j): where the two singular values
 /// nearly cancel (an element inverted through an edge), the polar rotation is not differentiable

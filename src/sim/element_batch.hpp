@@ -26,7 +26,8 @@ struct LaneMaterial {
   double rotation_fold = 0;
 };
 
-/// Matrices row-major: F[lane][3 r + c], weights[lane][3 a + c] (w_a), V likewise.
+/// F row-major (F[lane][3 r + c]), weights row by row (weights[lane][3 a + c] is w_a's c), V
+/// column-major (V[lane][3 c + r], as Eigen stores a Matrix3d).
 struct LaneBatch {
   // In.
   double F[kLaneBatch][9];

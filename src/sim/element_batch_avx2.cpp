@@ -162,7 +162,7 @@ void element_hessian_lanes(const LaneMaterial& p, LaneBatch* io, int count) {
     for (int r = 0; r < 3; ++r) {
       for (int c = 0; c < 3; ++c) {
         F.m[r][c][lane] = io->F[from][3 * r + c];
-        V.m[r][c][lane] = io->V[from][3 * r + c];
+        V.m[r][c][lane] = io->V[from][3 * c + r];
       }
     }
     for (int a = 0; a < 4; ++a) {
@@ -330,7 +330,7 @@ void element_hessian_lanes(const LaneMaterial& p, LaneBatch* io, int count) {
     io->energy[lane] = energy[lane];
     io->fallback[lane] = fallback[lane] != 0;
     for (int r = 0; r < 3; ++r) {
-      for (int c = 0; c < 3; ++c) io->V[lane][3 * r + c] = V.m[r][c][lane];
+      for (int c = 0; c < 3; ++c) io->V[lane][3 * c + r] = V.m[r][c][lane];
     }
   }
 }

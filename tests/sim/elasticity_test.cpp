@@ -292,7 +292,7 @@ TEST_P(Eigensystems, LaneKernelGivesTheScalarKernelsResults) {
       // The warm start handed back: a rotation that diagonalises F^T F (up to the tolerance; the
       // signs of a pair of columns are free, as in any rotation-variant SVD).
       Mat3 lane_v;
-      for (int k = 0; k < 9; ++k) lane_v(k / 3, k % 3) = batch.V[lane][k];
+      for (int k = 0; k < 9; ++k) lane_v(k % 3, k / 3) = batch.V[lane][k];  // column-major
       EXPECT_LT((lane_v.transpose() * lane_v - Mat3::Identity()).norm(), 1e-13);
       EXPECT_NEAR(lane_v.determinant(), 1, 1e-13);
       Mat3 d = lane_v.transpose() * F.transpose() * F * lane_v;
