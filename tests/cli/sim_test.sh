@@ -24,6 +24,15 @@ for f in 0 1 2 3 4; do
 done
 grep -q 'file="surface_0004.vtp"' out/surface.pvd || fail "the surface series lacks its last frame"
 json_check out/summary.json 'j["frames"] == 5 and j["steps"] == 20 and j["pieces"] == 2 and j["unconverged_steps"] == 0'
+# Stage times per step, the residual left, the final box.
+json_check out/summary.json 'all(j["ms_per_step"][k] >= 0 for k in ("cut", "surface", "remesh", "step", "total", "median", "p99", "max"))'
+json_check out/summary.json 'j["ms_per_step"]["step"] > 0 and j["ms_per_step"]["total"] >= j["ms_per_step"]["step"] and j["ms_per_step"]["max"] >= j["ms_per_step"]["median"]'
+json_check out/summary.json 'j["max_residual"] <= 1e-7 and len(j["final_box"]) == 6 and j["final_box"][2] > -0.05 and j["mean_cg_iterations"] > 0'
+expect_stdout "ms per step"
+# The real-time mode: a fixed budget, and the residual it left reported.
+sed 's/"obstacles"/"solver": {"mode": "real_time", "max_cg_iterations": 2}, "obstacles"/' drop.json > budget.json
+expect_exit 0 "$TETCUT" sim budget.json -o budget
+json_check budget/summary.json 'j["mean_newton_iterations"] == 1 and j["mean_cg_iterations"] <= 2 and j["max_residual"] > 0'
 # The frames are meshes and surfaces other tools read.
 "$PYTHON" - out <<'PY'
 import sys, meshio
