@@ -131,8 +131,8 @@ TEST_P(Eigensystems, ProjectionIsTheNumericalProjectionOfTheTangent) {
   const Lame p = model_parameters(GetParam(), lame_parameters(1e5, 0.3));
   for (const Mat3& F : sweep_to_inversion()) {
     const Mat9 D = stress_derivative(GetParam(), p, F);
-    const Eigen::SelfAdjointEigenSolver<Mat9> eigen(0.5 * (D + D.transpose()));
-    const Mat9 numerical = eigen.eigenvectors() * eigen.eigenvalues().cwiseMax(0.0).asDiagonal() * eigen.eigenvectors().transpose();
+    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(Eigen::MatrixXd(0.5 * (D + D.transpose())));
+    const Eigen::MatrixXd numerical = eigen.eigenvectors() * eigen.eigenvalues().cwiseMax(0.0).asDiagonal() * eigen.eigenvectors().transpose();
     EXPECT_LT((projected_stress_derivative(GetParam(), p, F) - numerical).norm(), 1e-9 * D.norm()) << F;
   }
 }
@@ -176,7 +176,7 @@ TEST_P(Eigensystems, ElementHessianIsTheProjectedTangentAndTheGradientsDerivativ
     }
     const Mat12 expected = tet.volume * B.transpose() * projected_stress_derivative(GetParam(), p, F) * B;
     EXPECT_LT((H - expected).norm(), 1e-7 * expected.norm()) << A;
-    EXPECT_GE(Eigen::SelfAdjointEigenSolver<Mat12>(H).eigenvalues().minCoeff(), -1e-10 * H.norm());
+    EXPECT_GE(Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(Eigen::MatrixXd(H)).eigenvalues().minCoeff(), -1e-10 * H.norm());
     // The gradient is the derivative of volume * Psi, by central differences.
     const Vec12 g = detail::element_gradient(tet.w, tet.volume, P);
     const double step = 1e-6;
@@ -189,7 +189,7 @@ TEST_P(Eigensystems, ElementHessianIsTheProjectedTangentAndTheGradientsDerivativ
       EXPECT_NEAR(g[k], numeric, 1e-5 * (std::abs(numeric) + p.mu * tet.volume)) << A << "\ncoordinate " << k;
     }
     // Where no eigenvalue is clamped, H is the gradient's derivative.
-    const Eigen::SelfAdjointEigenSolver<Mat9> tangent(stress_derivative(GetParam(), p, F));
+    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> tangent(Eigen::MatrixXd(stress_derivative(GetParam(), p, F)));
     if (tangent.eigenvalues().minCoeff() > 1e-6 * p.mu) {
       for (int k = 0; k < 12; ++k) {
         Vec12 plus = x, minus = x;
