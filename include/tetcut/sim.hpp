@@ -227,6 +227,17 @@ class Simulator {
   void add_spring(const EmbeddedPoint& p, const EmbeddedPoint& q, double stiffness);
   void clear_springs();
   Index num_springs() const;
+  /// Anchors: zero-rest-length springs (stiffness / 2) |p - target|^2 from embedded points to
+  /// points in space, e.g. a hook pulling the surface toward the cursor. Set as a whole, like the
+  /// contact points (remesh drops them); Error(kInvalidArgument) for a tet that does not exist, a
+  /// non-finite target or a negative stiffness.
+  struct Anchor {
+    EmbeddedPoint point;
+    Vec3 target = Vec3::Zero();
+    double stiffness = 0;
+  };
+  void set_anchors(std::vector<Anchor> anchors);
+  const std::vector<Anchor>& anchors() const;
   /// Where an embedded point is now.
   Vec3 position(const EmbeddedPoint& p) const;
 

@@ -160,6 +160,16 @@ void Simulator::add_spring(const EmbeddedPoint& p, const EmbeddedPoint& q, doubl
   s.springs_pending = true;  // the pattern must hold the blocks between the two tets' nodes
 }
 void Simulator::clear_springs() { state_->springs.clear(); }
+
+void Simulator::set_anchors(std::vector<Anchor> anchors) {
+  for (const Anchor& a : anchors) {
+    if (a.point.tet < 0 || a.point.tet >= num_tets()) throw Error(ErrorKind::kInvalidArgument, "anchor: no such tet");
+    if (!a.target.allFinite() || !a.point.weights.allFinite()) throw Error(ErrorKind::kInvalidArgument, "anchor: not finite");
+    if (!(a.stiffness >= 0) || !std::isfinite(a.stiffness)) throw Error(ErrorKind::kInvalidArgument, "anchor: stiffness must not be negative");
+  }
+  state_->anchors = std::move(anchors);
+}
+const std::vector<Simulator::Anchor>& Simulator::anchors() const { return state_->anchors; }
 Index Simulator::num_springs() const { return static_cast<Index>(state_->springs.size()); }
 
 Vec3 Simulator::position(const EmbeddedPoint& p) const {
@@ -194,9 +204,10 @@ void SimulatorState::carry_new_nodes(Index first_new_node, std::span<const Index
     assembled_at.conservativeResize(total, 3);
     for (Index i = 0; i < static_cast<Index>(new_node_source.size()); ++i) assembled_at.row(first_new_node + i) = assembled_at.row(new_node_source[i]);
   }
-  // Springs and contact points name tets and barycentric weights that a cut may change.
+  // Springs, anchors and contact points name tets and barycentric weights that a cut may change.
   contact_points.clear();
   springs.clear();
+  anchors.clear();
 }
 
 void Simulator::remesh(const TetMesh& mesh, std::span<const double> volume_fraction, Index first_new_node,

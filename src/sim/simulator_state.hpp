@@ -34,6 +34,7 @@ struct SimulatorState {
   double contact_stiffness = 0;
   bool contact_stiffness_given = false;
   std::vector<Spring> springs;
+  std::vector<Simulator::Anchor> anchors;
   Points x, v;
   Eigen::VectorXd mass;
   double size = 1;
@@ -115,7 +116,7 @@ struct SimulatorState {
   void set_element(Index t, const std::array<Index, 4>& nodes, const std::array<Vec3, 4>& rest, double fraction);
   void compute_masses();
   /// Nodes split by a cut start as their sources (position, velocity, constraint, rest position);
-  /// springs and contact points are dropped.
+  /// springs, anchors and contact points are dropped.
   void carry_new_nodes(Index first_new_node, std::span<const Index> new_node_source);
 
   Index num_clusters() const { return (static_cast<Index>(ordered.size()) + kCluster - 1) / kCluster; }
@@ -186,6 +187,17 @@ void SimulatorState::for_each_constraint(const Points& at, Visit&& visit) const 
       visit(nodes, coefficients, 4, 0.5 * contact_stiffness * d * d, Vec3(contact_stiffness * d * n),
             Mat3(contact_stiffness * n * n.transpose()));
     }
+  }
+  for (const Simulator::Anchor& anchor : anchors) {
+    Vec3 y = Vec3::Zero();
+    for (int k = 0; k < 4; ++k) {
+      nodes[k] = elements[anchor.point.tet].nodes[k];
+      coefficients[k] = anchor.point.weights[k];
+      y += coefficients[k] * at.row(nodes[k]).transpose();
+    }
+    const Vec3 d = y - anchor.target;
+    visit(nodes, coefficients, 4, 0.5 * anchor.stiffness * d.squaredNorm(), Vec3(anchor.stiffness * d),
+          Mat3(anchor.stiffness * Mat3::Identity()));
   }
   for (const Spring& spring : springs) {
     Vec3 y = Vec3::Zero();

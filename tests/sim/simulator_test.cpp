@@ -507,6 +507,41 @@ TEST_P(Integrator, AConvergedStepIsSettledToTheTolerance) {
   }
 }
 
+TEST_P(Integrator, AnAnchorPullsItsPointToTheTarget) {
+  // A block held at its base; a hook (anchor) on a top corner pulled sideways. The stiffer the
+  // hook, the closer the corner follows; released (no anchors), it springs back.
+  const TetMesh block = make_grid(Box{}, {3, 3, 3}, 5);
+  Material material;
+  material.model = GetParam();
+  const EmbeddedPoint corner{block.num_tets() - 1, Eigen::Vector4d(0.25, 0.25, 0.25, 0.25)};
+  const auto pulled = [&](double stiffness) {
+    Simulator sim(block, material);
+    for (Index n = 0; n < block.num_nodes(); ++n) {
+      if (block.rest()(n, 2) == 0) sim.pin(n);
+    }
+    const Vec3 start = sim.position(corner), target = start + Vec3(0.2, 0, 0);
+    sim.set_anchors({{corner, target, stiffness}});
+    StepOptions options;
+    options.gravity = Vec3::Zero();
+    EXPECT_TRUE(sim.solve_static(options).converged);
+    const double reached = (sim.position(corner) - start).dot(Vec3(1, 0, 0)) / 0.2;
+    sim.set_anchors({});
+    EXPECT_TRUE(sim.solve_static(options).converged);
+    EXPECT_LT((sim.position(corner) - start).norm(), 1e-6);  // back where it was
+    return reached;
+  };
+  const double soft = pulled(1e3), stiff = pulled(1e7);
+  EXPECT_GT(soft, 0.001);
+  EXPECT_LT(soft, stiff);
+  EXPECT_GT(stiff, 0.95);
+  EXPECT_LE(stiff, 1.0 + 1e-9);
+  // Bad anchors are refused.
+  Simulator sim(block, material);
+  EXPECT_THROW(sim.set_anchors({{EmbeddedPoint{block.num_tets(), corner.weights}, Vec3::Zero(), 1}}), Error);
+  EXPECT_THROW(sim.set_anchors({{corner, Vec3(std::nan(""), 0, 0), 1}}), Error);
+  EXPECT_THROW(sim.set_anchors({{corner, Vec3::Zero(), -1}}), Error);
+}
+
 TEST(Simulator, RejectsBadParameters) {
   const TetMesh cube = make_grid(Box{}, {1, 1, 1}, 5);
   Material bad;
