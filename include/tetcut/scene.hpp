@@ -34,6 +34,10 @@
 //                  the strip it swept since the last step is cut, world-space poses followed in the
 //                  material (mapped to rest space through the current motion, as examples/scalpel.cpp)
 //     "transforms":[{"time", "rotate": {"axis", "degrees", "centre"}} | {"time", "translate": [...]}]
+//     "events":    [{"time", and one of "blade": [ax,ay,az, bx,by,bz] | "lift_blade": true
+//                    | "grab": [x,y,z] (with "stiffness") | "move_hook": {"hook", "to": [x,y,z]}
+//                    | "release": HOOK | "pin": {"at": [x,y,z], "radius"} | "unpin": {...}}]
+//                  a live session's events, as it records them (see tetcut/session.hpp); world space
 //     "springs":   [{"time", "cuts": [FIRST, LAST], "stiffness"}]   close those cut events' incisions
 //     "output":    {"mesh": true, "surface": true,
 //                   "picture": {"box": [...], "azimuth", "elevation"}} }   the camera of pictures
@@ -68,6 +72,19 @@ struct SceneScalpel {
   std::vector<BladePose> poses;  ///< at least 2
   /// The pose at time t (from <= t <= until): linear between the poses, spread evenly in time.
   BladePose at(double t) const;
+};
+
+/// A live event (tetcut/session.hpp): what a user does to a running session, as it is recorded and
+/// replayed. World space throughout.
+struct SessionEvent {
+  enum class Kind { kBlade, kLiftBlade, kGrab, kMoveHook, kRelease, kPin, kUnpin };
+  Kind kind = Kind::kBlade;
+  double time = 0;            ///< simulated seconds: applied before the step that starts then
+  BladePose pose{Vec3::Zero(), Vec3::Zero()};  ///< kBlade: where the blade is
+  Vec3 point = Vec3::Zero();  ///< kGrab: the point to hook; kMoveHook: the target; kPin, kUnpin: the centre
+  double radius = 0;          ///< kPin, kUnpin: nodes within this distance
+  int hook = -1;              ///< kMoveHook, kRelease: which (grabs number them 0, 1, ...)
+  double stiffness = 0;       ///< kGrab: N/m; 0 for the default
 };
 
 struct SceneTransform {
@@ -106,6 +123,9 @@ struct Scene {
   std::vector<SceneScalpel> scalpels;
   std::vector<SceneTransform> transforms;
   std::vector<SceneSprings> springs;
+  std::vector<SessionEvent> events;  ///< sorted by time (stable: same-time events keep their order)
+  /// The file's JSON as loaded, for a recording to extend.
+  std::string json;
   bool write_mesh = true, write_surface = true;
   /// Where pictures of the frames look (for a renderer; the scene does not draw).
   std::optional<Box> picture_box;

@@ -7,6 +7,7 @@
 #include <tetcut/generators.hpp>
 #include <tetcut/io.hpp>
 #include <tetcut/scene.hpp>
+#include <tetcut/session.hpp>
 
 #include <nlohmann/json.hpp>
 
@@ -219,6 +220,70 @@ SceneCut load_cut(const Value& cut, const std::filesystem::path& source) {
   return c;
 }
 
+SessionEvent load_event(const Value& e) {
+  e.allow({"time", "blade", "lift_blade", "grab", "stiffness", "move_hook", "release", "pin", "unpin"});
+  SessionEvent event;
+  event.time = e.at("time").non_negative();
+  const int kinds = e.has("blade") + e.has("lift_blade") + e.has("grab") + e.has("move_hook") + e.has("release") + e.has("pin") + e.has("unpin");
+  if (kinds != 1) e.fail("give exactly one of 'blade', 'lift_blade', 'grab', 'move_hook', 'release', 'pin' or 'unpin'");
+  if (e.has("stiffness") && !e.has("grab")) e.at("stiffness").fail("goes with 'grab'");
+  if (const auto blade = e.get("blade")) {
+    const auto ab = blade->numbers(6);
+    event.kind = SessionEvent::Kind::kBlade;
+    event.pose = {Vec3(ab[0], ab[1], ab[2]), Vec3(ab[3], ab[4], ab[5])};
+  } else if (const auto lift = e.get("lift_blade")) {
+    if (!lift->boolean()) lift->fail("must be true");
+    event.kind = SessionEvent::Kind::kLiftBlade;
+  } else if (const auto grab = e.get("grab")) {
+    event.kind = SessionEvent::Kind::kGrab;
+    event.point = grab->vec3();
+    if (const auto k = e.get("stiffness")) event.stiffness = k->positive();
+  } else if (const auto move = e.get("move_hook")) {
+    move->allow({"hook", "to"});
+    event.kind = SessionEvent::Kind::kMoveHook;
+    event.hook = move->at("hook").integer(0);
+    event.point = move->at("to").vec3();
+  } else if (const auto release = e.get("release")) {
+    event.kind = SessionEvent::Kind::kRelease;
+    event.hook = release->integer(0);
+  } else {
+    const bool pin = e.has("pin");
+    const Value region = e.at(pin ? "pin" : "unpin");
+    region.allow({"at", "radius"});
+    event.kind = pin ? SessionEvent::Kind::kPin : SessionEvent::Kind::kUnpin;
+    event.point = region.at("at").vec3();
+    event.radius = region.at("radius").positive();
+  }
+  return event;
+}
+
+Json event_json(const SessionEvent& e) {
+  Json j{{"time", e.time}};
+  switch (e.kind) {
+    case SessionEvent::Kind::kBlade:
+      j["blade"] = {e.pose.a[0], e.pose.a[1], e.pose.a[2], e.pose.b[0], e.pose.b[1], e.pose.b[2]};
+      break;
+    case SessionEvent::Kind::kLiftBlade:
+      j["lift_blade"] = true;
+      break;
+    case SessionEvent::Kind::kGrab:
+      j["grab"] = {e.point[0], e.point[1], e.point[2]};
+      if (e.stiffness > 0) j["stiffness"] = e.stiffness;
+      break;
+    case SessionEvent::Kind::kMoveHook:
+      j["move_hook"] = {{"hook", e.hook}, {"to", {e.point[0], e.point[1], e.point[2]}}};
+      break;
+    case SessionEvent::Kind::kRelease:
+      j["release"] = e.hook;
+      break;
+    case SessionEvent::Kind::kPin:
+    case SessionEvent::Kind::kUnpin:
+      j[e.kind == SessionEvent::Kind::kPin ? "pin" : "unpin"] = {{"at", {e.point[0], e.point[1], e.point[2]}}, {"radius", e.radius}};
+      break;
+  }
+  return j;
+}
+
 }  // namespace
 
 Scene load_scene(const std::filesystem::path& path) {
@@ -234,9 +299,10 @@ Scene load_scene(const std::filesystem::path& path) {
   const std::string file = path.string();
   const Value root(json, "", &file);
   root.allow({"mesh", "embed", "material", "gravity", "time", "solver", "pin", "move", "obstacles", "contact_stiffness",
-              "cuts", "scalpels", "transforms", "springs", "output"});
+              "cuts", "scalpels", "transforms", "springs", "events", "output"});
   Scene scene;
   scene.source = path;
+  scene.json = json.dump();
 
   const auto embed = root.get("embed");
   if (embed) {
@@ -385,6 +451,10 @@ Scene load_scene(const std::filesystem::path& path) {
       scene.springs.push_back(springs_event);
     }
   }
+  if (const auto events = root.get("events")) {
+    for (const Value& e : events->array()) scene.events.push_back(load_event(e));
+    std::stable_sort(scene.events.begin(), scene.events.end(), [](const SessionEvent& a, const SessionEvent& b) { return a.time < b.time; });
+  }
   if (const auto output = root.get("output")) {
     output->allow({"mesh", "surface", "picture"});
     if (const auto v = output->get("mesh")) scene.write_mesh = v->boolean();
@@ -412,8 +482,6 @@ namespace {
 using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
 
-bool in_box(const Box& box, const Vec3& x) { return (x.array() >= box.min.array()).all() && (x.array() <= box.max.array()).all(); }
-
 // The .pvd series of one kind of output, listing frames 0 .. times.size() - 1.
 void write_frame_series(const std::filesystem::path& path, const std::string& prefix, const std::string& extension,
                         const std::vector<double>& times) {
@@ -432,34 +500,12 @@ double percentile(std::vector<double> v, double p) {
   return v[std::min(v.size() - 1, static_cast<std::size_t>(p * static_cast<double>(v.size() - 1) + 0.5))];
 }
 
-// One run of a scene: the cutter, the simulator and the material surface advanced a step at a
-// time, with the scene's timed events applied before the step they fall in. After a cut the
-// simulator follows the cutter's batch (Simulator::remesh from the cutter: only what the batch
-// touched); the material surface is rebuilt when contact, springs or a frame need it, and the
-// whole result (pieces) only for frames and the summary.
+// A run of a scene: a Session advanced step by step, its frames written as the scene asks.
 class SceneRunner {
  public:
   SceneRunner(const Scene& scene, const std::filesystem::path& directory, const SceneRunOptions& options)
-      : scene_(scene),
-        directory_(directory),
-        options_(options),
-        cutter_(scene.embed_surface ? embed(scene.mesh, *scene.embed_surface, scene.embed_options) : Cutter(scene.mesh)),
-        sim_(start_simulator()),
-        cut_ids_(scene.cuts.size(), {-1, -1}),
-        scalpel_rest_(scene.scalpels.size()) {
-    if (scene.contact_stiffness > 0) sim_.set_contact_stiffness(scene.contact_stiffness);
-    for (const sim::Obstacle& o : scene.obstacles) sim_.add_obstacle(o);
-    pinned_.assign(static_cast<std::size_t>(sim_.num_nodes()), 0);
-    for (Index n = 0; n < sim_.num_nodes(); ++n) {
-      for (const Box& box : scene.pins) {
-        if (in_box(box, rest_of(n))) {
-          pinned_[n] = 1;
-          sim_.pin(n);
-        }
-      }
-    }
+      : scene_(scene), directory_(directory), options_(options), session_(scene) {
     mesh_fields_.current_positions = true;
-    refresh_constraints();
   }
 
   SceneSummary run() {
@@ -472,42 +518,30 @@ class SceneRunner {
     write_frame(0);
     std::vector<double> step_ms;
     double newton_total = 0, cg_total = 0;
+    SceneStageSeconds& t = summary_.stage_seconds;
     for (int s = 0; s < steps; ++s) {
-      const double t = s * dt;
-      const double now = t + dt / 2;  // events due by the middle of this step happen before it
-      const SceneStageSeconds before = summary_.stage_seconds;
-      apply_transforms(now);
-      current_set_ = false;
-      bool cut = apply_cuts(now);
-      cut = apply_scalpels(t, t + dt) || cut;
-      const bool springs_added = apply_springs(now);
-      if (cut || springs_added) {
-        const auto start = Clock::now();
-        refresh_constraints();
-        summary_.stage_seconds.remesh += seconds_since(start);
-      }
-      if (springs_added) summary_.spring_gap_when_attached = std::max(summary_.spring_gap_when_attached, widest_spring());
-      apply_moves(t);
-      const auto step_start = Clock::now();
-      const sim::StepReport report = sim_.step(scene_.step);
-      summary_.stage_seconds.step += seconds_since(step_start);
-      newton_total += report.newton_iterations;
-      cg_total += report.cg_iterations;
-      summary_.max_residual = std::max(summary_.max_residual, report.residual);
-      summary_.unconverged_steps += report.converged ? 0 : 1;
+      const SessionStep step = session_.advance();
+      t.cut += step.seconds.cut;
+      t.surface += step.seconds.surface;
+      t.remesh += step.seconds.remesh;
+      t.step += step.seconds.step;
+      step_ms.push_back(1e3 * (step.seconds.cut + step.seconds.surface + step.seconds.remesh + step.seconds.step));
+      newton_total += step.report.newton_iterations;
+      cg_total += step.report.cg_iterations;
+      summary_.max_residual = std::max(summary_.max_residual, step.report.residual);
+      summary_.unconverged_steps += step.report.converged ? 0 : 1;
       ++summary_.steps;
-      const SceneStageSeconds& after = summary_.stage_seconds;
-      step_ms.push_back(1e3 * ((after.cut - before.cut) + (after.surface - before.surface) + (after.remesh - before.remesh) +
-                               (after.step - before.step)));
       if ((s + 1) % every == 0) {
         write_frame((s + 1) * dt);
         if (options_.max_frames >= 0 && static_cast<int>(times_.size()) - 1 >= options_.max_frames) break;
       }
     }
-    const CutResult& r = result();
+    const CutResult& r = session_.result();
     summary_.frames = static_cast<int>(times_.size());
-    summary_.springs = static_cast<Index>(spring_ends_.size());
-    summary_.spring_gap_final = widest_spring();
+    summary_.cuts_applied = session_.cuts_applied();
+    summary_.springs = session_.num_incision_springs();
+    summary_.spring_gap_when_attached = session_.incision_gap_when_attached();
+    summary_.spring_gap_final = session_.widest_incision_spring();
     summary_.tets = r.mesh.mesh.num_tets();
     summary_.nodes = r.mesh.mesh.num_nodes();
     summary_.pieces = r.mesh.num_pieces();
@@ -519,220 +553,40 @@ class SceneRunner {
     summary_.step_ms_median = percentile(step_ms, 0.5);
     summary_.step_ms_p99 = percentile(step_ms, 0.99);
     summary_.step_ms_max = step_ms.empty() ? 0 : *std::max_element(step_ms.begin(), step_ms.end());
-    summary_.final_box = {sim_.positions().colwise().minCoeff().transpose(), sim_.positions().colwise().maxCoeff().transpose()};
+    const Points& x = session_.simulator().positions();
+    summary_.final_box = {x.colwise().minCoeff().transpose(), x.colwise().maxCoeff().transpose()};
     write_summary();
     return summary_;
   }
 
  private:
-  sim::Simulator start_simulator() {
-    const CutResult& r = result();
-    std::vector<double> fractions = r.mesh.material_fractions();
-    for (double& f : fractions) f = std::min(f, 1.0);  // a rounding above 1 is not material
-    return sim::Simulator(r.mesh.mesh, scene_.material, fractions);
-  }
-
-  Vec3 rest_of(Index node) const { return cutter_.input().rest().row(cutter_.node_parent()[node]).transpose(); }
-
-  // The whole result (pieces, the mesh with its fields), rebuilt after cuts when asked for.
-  CutResult& result() {
-    if (!result_) {
-      result_ = cutter_.result();
-      surface_ = result_->surface;
-      surface_current_ = true;
-    }
-    return *result_;
-  }
-  const MaterialSurface& surface() {
-    if (!surface_current_) {
-      const auto start = Clock::now();
-      surface_ = cutter_.surface();
-      surface_current_ = true;
-      summary_.stage_seconds.surface += seconds_since(start);
-    }
-    return surface_;
-  }
-
-  void apply_transforms(double now) {
-    while (next_transform_ < scene_.transforms.size() && scene_.transforms[next_transform_].time <= now) {
-      const SceneTransform& tr = scene_.transforms[next_transform_++];
-      Points x = sim_.positions(), v = sim_.velocities();
-      for (Index n = 0; n < sim_.num_nodes(); ++n) {
-        x.row(n) = (tr.rotation * (x.row(n).transpose() - tr.centre) + tr.centre + tr.translation).transpose();
-        v.row(n) = (tr.rotation * v.row(n).transpose()).transpose();
-      }
-      sim_.set_positions(x);
-      sim_.set_velocities(v);
-      for (Index n = 0; n < sim_.num_nodes(); ++n) {
-        if (pinned_[n]) sim_.pin(n);
-      }
-    }
-  }
-
-  // World-space events of one step see the mesh where the simulator has it; new nodes of a
-  // batch start at their sources, so once per step is enough.
-  void set_current_once() {
-    if (current_set_) return;
-    cutter_.set_current(sim_.positions());
-    current_set_ = true;
-  }
-
-  void after_batch(const CutBatchReport& batch) {
-    const auto start = Clock::now();
-    sim_.remesh(cutter_, batch);
-    pinned_.resize(static_cast<std::size_t>(sim_.num_nodes()), 0);
-    for (Index i = 0; i < static_cast<Index>(batch.new_node_source.size()); ++i) {
-      pinned_[batch.first_new_node + i] = pinned_[batch.new_node_source[i]];
-    }
-    result_.reset();
-    surface_current_ = false;
-    ++summary_.cuts_applied;
-    summary_.stage_seconds.remesh += seconds_since(start);
-  }
-
-  bool apply_cuts(double now) {
-    bool any = false;
-    while (next_cut_ < scene_.cuts.size() && scene_.cuts[next_cut_].time <= now) {
-      const SceneCut& cut = scene_.cuts[next_cut_];
-      const auto start = Clock::now();
-      const std::int64_t first_id = cutter_.num_cut_triangles();
-      CutBatchReport batch;
-      if (cut.world_space) {
-        set_current_once();
-        batch = cutter_.cut_deformed(cut.triangles);
-      } else {
-        batch = cutter_.cut(cut.triangles);
-      }
-      cut_ids_[next_cut_++] = {first_id, cutter_.num_cut_triangles()};
-      summary_.stage_seconds.cut += seconds_since(start);
-      after_batch(batch);
-      any = true;
-    }
-    return any;
-  }
-
-  // Each scalpel active during [t0, t1] cuts the strip it swept, between its rest-space poses at
-  // the start and the end of the step (world-space poses mapped through the current motion).
-  bool apply_scalpels(double t0, double t1) {
-    bool any = false;
-    for (std::size_t i = 0; i < scene_.scalpels.size(); ++i) {
-      const SceneScalpel& blade = scene_.scalpels[i];
-      if (t1 <= blade.from || t0 >= blade.until) continue;
-      const auto start = Clock::now();
-      const auto to_material = [&](const BladePose& pose) {
-        if (!blade.world_space) return pose;
-        set_current_once();
-        Points world(2, 3);
-        world.row(0) = pose.a.transpose();
-        world.row(1) = pose.b.transpose();
-        const Points rest = cutter_.to_rest(world);
-        return BladePose{rest.row(0).transpose(), rest.row(1).transpose()};
-      };
-      if (!scalpel_rest_[i]) scalpel_rest_[i] = to_material(blade.at(std::max(t0, blade.from)));
-      const BladePose end = to_material(blade.at(std::min(t1, blade.until)));
-      const std::array<BladePose, 2> strip{*scalpel_rest_[i], end};
-      scalpel_rest_[i] = end;
-      const TriangleSurface triangles = swept_blade(strip);
-      CutBatchReport batch;
-      if (triangles.num_triangles() > 0) batch = cutter_.cut(triangles);
-      summary_.stage_seconds.cut += seconds_since(start);
-      if (triangles.num_triangles() == 0) continue;  // the blade stood still
-      after_batch(batch);
-      any = true;
-    }
-    return any;
-  }
-
-  bool apply_springs(double now) {
-    bool added = false;
-    while (next_springs_ < scene_.springs.size() && scene_.springs[next_springs_].time <= now) {
-      active_springs_.push_back(&scene_.springs[next_springs_++]);
-      added = true;
-    }
-    return added;
-  }
-
-  // Contact points (the surface's vertices) and springs across incisions name tets: set again
-  // after every cut.
-  void refresh_constraints() {
-    if (!scene_.obstacles.empty()) {
-      const MaterialSurface& s = surface();
-      std::vector<sim::EmbeddedPoint> points;
-      points.reserve(static_cast<std::size_t>(s.surface.num_vertices()));
-      for (Index v = 0; v < s.surface.num_vertices(); ++v) points.push_back({s.vertex_tet[v], s.vertex_weights.row(v).transpose()});
-      sim_.set_contact_points(std::move(points));
-    }
-    sim_.clear_springs();
-    spring_ends_.clear();
-    for (const SceneSprings* springs : active_springs_) {
-      const double k = springs->stiffness > 0 ? springs->stiffness : 100 * sim_.contact_stiffness();
-      for (int c = springs->first_cut; c <= springs->last_cut; ++c) {
-        if (cut_ids_[c].first < 0) continue;  // not applied yet
-        for (const auto& [p, q] : sim::incision_pairs(surface(), cut_ids_[c].first, cut_ids_[c].second)) {
-          sim_.add_spring(p, q, k);
-          spring_ends_.emplace_back(p, q);
-        }
-      }
-    }
-  }
-
-  double widest_spring() const {
-    double gap = 0;
-    for (const auto& [p, q] : spring_ends_) gap = std::max(gap, (sim_.position(p) - sim_.position(q)).norm());
-    return gap;
-  }
-
-  // Kinematic nodes: those in an active move box go with its velocity; others are let go.
-  void apply_moves(double t) {
-    if (scene_.moves.empty()) return;
-    for (Index n = 0; n < sim_.num_nodes(); ++n) {
-      if (pinned_[n]) continue;
-      bool moved = false;
-      for (const SceneMove& m : scene_.moves) {
-        if (t + 1e-12 >= m.from && t < m.until && in_box(m.box, rest_of(n))) {
-          sim_.move_to(n, sim_.positions().row(n).transpose() + scene_.step.dt * m.velocity);
-          moved = true;
-          break;
-        }
-      }
-      if (!moved) sim_.release(n);
-    }
-  }
-
-  void write_frame(double t) {
+  void write_frame(double time) {
     const auto start = Clock::now();
     const int frame = static_cast<int>(times_.size());
     char name[64];
     if (scene_.write_mesh) {
-      CutResult& r = result();
-      if (fields_for_cut_ != summary_.cuts_applied || frame == 0) {
+      CutResult& r = session_.result();
+      if (fields_for_cut_ != session_.cuts_applied() || frame == 0) {
         // What a frame's mesh file carries per tet changes only with the mesh.
         CellField piece{"piece", {}, true}, fraction{"material_fraction", {}, false};
         piece.values.assign(r.mesh.tet_piece.begin(), r.mesh.tet_piece.end());
         fraction.values = r.mesh.material_fractions();
         for (double& f : fraction.values) f = std::min(f, 1.0);
         mesh_fields_.cell_fields = {std::move(piece), std::move(fraction)};
-        fields_for_cut_ = summary_.cuts_applied;
+        fields_for_cut_ = session_.cuts_applied();
       }
-      r.mesh.mesh.set_current(sim_.positions());
+      r.mesh.mesh.set_current(session_.simulator().positions());
       std::snprintf(name, sizeof name, "mesh_%04d.vtu", frame);
       write_tet_mesh(directory_ / name, r.mesh.mesh, mesh_fields_);
     }
     if (scene_.write_surface || options_.frame_surface) {
-      const MaterialSurface& s = surface();
-      TriangleSurface moved = s.surface;
-      const auto& tets = cutter_.tet_nodes();
-      const Points& x = sim_.positions();
-      for (Index v = 0; v < moved.num_vertices(); ++v) {
-        Vec3 p = Vec3::Zero();
-        for (int k = 0; k < 4; ++k) p += s.vertex_weights(v, k) * x.row(tets[s.vertex_tet[v]][k]).transpose();
-        moved.vertices.row(v) = p.transpose();
-      }
+      TriangleSurface moved = session_.surface().surface;
+      moved.vertices = session_.surface_positions();
       std::snprintf(name, sizeof name, "surface_%04d.vtp", frame);
       if (scene_.write_surface) write_surface(directory_ / name, moved);
       if (options_.frame_surface) options_.frame_surface(frame, moved);
     }
-    times_.push_back(t);
+    times_.push_back(time);
     if (scene_.write_mesh) write_frame_series(directory_ / "mesh.pvd", "mesh", ".vtu", times_);
     if (scene_.write_surface) write_frame_series(directory_ / "surface.pvd", "surface", ".vtp", times_);
     summary_.stage_seconds.output += seconds_since(start);
@@ -777,18 +631,7 @@ class SceneRunner {
   const Scene& scene_;
   std::filesystem::path directory_;
   const SceneRunOptions& options_;
-  Cutter cutter_;
-  std::optional<CutResult> result_;
-  MaterialSurface surface_;
-  bool surface_current_ = false;
-  sim::Simulator sim_;
-  std::vector<std::uint8_t> pinned_;
-  std::vector<std::pair<std::int64_t, std::int64_t>> cut_ids_;  // cut id ranges of applied cut events, for springs
-  std::vector<std::optional<BladePose>> scalpel_rest_;           // each scalpel's last pose, in rest space
-  std::vector<const SceneSprings*> active_springs_;
-  std::vector<std::pair<sim::EmbeddedPoint, sim::EmbeddedPoint>> spring_ends_;
-  std::size_t next_cut_ = 0, next_transform_ = 0, next_springs_ = 0;
-  bool current_set_ = false;
+  Session session_;
   TetMeshWriteOptions mesh_fields_;
   int fields_for_cut_ = -1;
   std::vector<double> times_;
@@ -800,6 +643,26 @@ class SceneRunner {
 
 SceneSummary run_scene(const Scene& scene, const std::filesystem::path& directory, const SceneRunOptions& options) {
   return SceneRunner(scene, directory, options).run();
+}
+
+void write_recording(const std::filesystem::path& path, const Scene& scene, const Session& session) {
+  Json json = Json::parse(scene.json);
+  // Paths in the scene are relative to it: absolute, so the recording replays from anywhere.
+  const auto absolute = [&](Json& value) {
+    if (value.is_string()) value = std::filesystem::absolute(relative_to(scene.source, value.get<std::string>())).string();
+  };
+  if (json.contains("mesh") && json["mesh"].contains("file")) absolute(json["mesh"]["file"]);
+  if (json.contains("embed") && json["embed"].contains("surface")) absolute(json["embed"]["surface"]);
+  if (json.contains("cuts")) {
+    for (Json& cut : json["cuts"]) {
+      if (cut.contains("triangles")) absolute(cut["triangles"]);
+    }
+  }
+  Json events = Json::array();
+  for (const SessionEvent& e : session.recording()) events.push_back(event_json(e));
+  json["events"] = std::move(events);
+  json["time"]["duration"] = session.time();
+  write_text_file(path, json.dump(2) + "\n");
 }
 
 }  // namespace tetcut
