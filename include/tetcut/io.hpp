@@ -63,6 +63,9 @@ void write_tet_mesh(const std::filesystem::path& path, const TetMesh& mesh, cons
 /// triangles around their first corner. STL vertices are shared where coordinates are
 /// bit-for-bit equal (STL stores each triangle's corners separately).
 TriangleSurface read_surface(const std::filesystem::path& path);
+/// Reads a surface stored as `member` (its path inside the archive) of a .tar.gz archive, such
+/// as the real scans Debian's libcgal-demo ships in /usr/share/doc/libcgal-dev/data.tar.gz.
+TriangleSurface read_surface(const std::filesystem::path& archive, const std::string& member);
 void write_surface(const std::filesystem::path& path, const TriangleSurface& surface,
                    const SurfaceWriteOptions& options = {});
 

@@ -10,13 +10,16 @@
 //                                             "tets_per_cube": 5|6}}
 //                  | {"bcc": {"box": [...], "spacing": H}} | {"tet": [[x,y,z] x 4]}   (mesh or embed required)
 //     "embed":     {"surface": PATH, "keep": "inside"|"largest", "spacing": H | "cells": N}
+//                  (with "archive": A.tar.gz, "surface" is a file inside that archive)
 //     "material":  {"model": "stable_neo_hookean"|"corotated", "youngs_modulus", "poissons_ratio",
 //                   "density", "mass_damping", "stiffness_damping"}
 //     "gravity":   [gx, gy, gz]
 //     "time":      {"dt", "duration" (required), "output_every"}
 //     "solver":    {"mode": "converged"|"real_time", "tolerance", "max_newton_iterations",
-//                   "max_cg_iterations", "linear": "cg"|"cholesky"}   real_time: a fixed budget per step
-//                   (by default 1 Newton iteration of at most 30 CG iterations; see StepOptions::real_time)
+//                   "max_cg_iterations", "reuse_hessian", "linear": "cg"|"cholesky"}   real_time: a fixed
+//                   budget per step (by default 1 Newton iteration of at most 30 CG iterations, the
+//                   matrix kept for up to 4 steps; see StepOptions::real_time). "reuse_hessian": 1
+//                   assembles every step (steadier on sliver-rich embedded meshes after cuts)
 //     "pin":       [{"box": [...]}]                     nodes whose rest position is in the box
 //     "move":      [{"box": [...], "velocity": [...], "from", "until"}]   kinematic nodes
 //     "obstacles": [{"plane": {"point", "normal"}} | {"sphere": {"centre", "radius"}}

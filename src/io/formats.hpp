@@ -55,6 +55,11 @@ void write_off(std::ostream& out, const TriangleSurface& surface);
 TriangleSurface read_ply(std::string_view bytes, const std::string& source);
 void write_ply(std::ostream& out, const TriangleSurface& surface, bool binary);
 TriangleSurface read_stl(std::string_view bytes, const std::string& source);
+/// A surface file's bytes, in the format its name's extension says; `source` names it in errors.
+TriangleSurface read_surface_bytes(std::string_view bytes, const std::filesystem::path& name, const std::string& source);
+/// One file of a .tar.gz archive, decompressed as far as it and no further. Throws
+/// Error(kInvalidInput) naming the archive when it holds no such file or is corrupt.
+std::string read_archive_member(const std::filesystem::path& archive, const std::string& member);
 void write_stl(std::ostream& out, const TriangleSurface& surface, bool binary);
 
 /// Writes `value` in the shortest decimal form that reads back to the same double.

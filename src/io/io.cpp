@@ -166,18 +166,23 @@ void write_series(const std::filesystem::path& pvd, const std::vector<SeriesEntr
   out.commit();
 }
 
+namespace io {
+
+TriangleSurface read_surface_bytes(std::string_view bytes, const std::filesystem::path& name, const std::string& source) {
+  if (file_kind(name) != FileKind::kSurface) unknown_extension(name, "surface", supported_surface_extensions());
+  const std::string ext = extension_of(name);
+  if (ext == ".obj") return read_obj(bytes, source);
+  if (ext == ".off") return read_off(bytes, source);
+  if (ext == ".ply") return read_ply(bytes, source);
+  if (ext == ".stl") return read_stl(bytes, source);
+  return read_vtp(bytes, source);
+}
+
+}  // namespace io
+
 TriangleSurface read_surface(const std::filesystem::path& path) {
-  const std::string ext = io::extension_of(path);
   if (file_kind(path) != FileKind::kSurface) unknown_extension(path, "surface", supported_surface_extensions());
-  const std::string bytes = io::read_file(path);
-  const std::string source = path.string();
-  TriangleSurface surface;
-  if (ext == ".obj") surface = io::read_obj(bytes, source);
-  if (ext == ".off") surface = io::read_off(bytes, source);
-  if (ext == ".ply") surface = io::read_ply(bytes, source);
-  if (ext == ".stl") surface = io::read_stl(bytes, source);
-  if (ext == ".vtp") surface = io::read_vtp(bytes, source);
-  return surface;
+  return io::read_surface_bytes(io::read_file(path), path, path.string());
 }
 
 void write_surface(const std::filesystem::path& path, const TriangleSurface& surface, const SurfaceWriteOptions& options) {

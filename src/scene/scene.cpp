@@ -306,8 +306,12 @@ Scene load_scene(const std::filesystem::path& path) {
 
   const auto embed = root.get("embed");
   if (embed) {
-    embed->allow({"surface", "keep", "spacing", "cells"});
-    scene.embed_surface = read_surface(relative_to(path, embed->at("surface").string()));
+    embed->allow({"surface", "archive", "keep", "spacing", "cells"});
+    if (const auto archive = embed->get("archive")) {
+      scene.embed_surface = read_surface(relative_to(path, archive->string()), embed->at("surface").string());
+    } else {
+      scene.embed_surface = read_surface(relative_to(path, embed->at("surface").string()));
+    }
     if (const auto keep = embed->get("keep")) {
       scene.embed_options.keep = keep->choice({"inside", "largest"}) == "inside" ? KeepMaterial::kInside : KeepMaterial::kLargest;
     }
@@ -346,7 +350,7 @@ Scene load_scene(const std::filesystem::path& path) {
   scene.duration = time.at("duration").positive();
   if (const auto every = time.get("output_every")) scene.output_every = every->positive();
   if (const auto solver = root.get("solver")) {
-    solver->allow({"mode", "tolerance", "max_newton_iterations", "max_cg_iterations", "linear"});
+    solver->allow({"mode", "tolerance", "max_newton_iterations", "max_cg_iterations", "reuse_hessian", "linear"});
     if (const auto mode = solver->get("mode"); mode && mode->choice({"converged", "real_time"}) == "real_time") {
       const sim::StepOptions budget = sim::StepOptions::real_time(scene.step.dt);
       scene.step.max_newton_iterations = budget.max_newton_iterations;
@@ -357,6 +361,7 @@ Scene load_scene(const std::filesystem::path& path) {
     if (const auto v = solver->get("tolerance")) scene.step.tolerance = v->positive();
     if (const auto v = solver->get("max_newton_iterations")) scene.step.max_newton_iterations = v->integer(1);
     if (const auto v = solver->get("max_cg_iterations")) scene.step.max_cg_iterations = v->integer(1);
+    if (const auto v = solver->get("reuse_hessian")) scene.step.reuse_hessian = v->integer(1);
     if (const auto v = solver->get("linear")) {
       scene.step.solver = v->choice({"cg", "cholesky"}) == "cg" ? sim::LinearSolver::kConjugateGradient : sim::LinearSolver::kCholesky;
     }

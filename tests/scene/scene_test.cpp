@@ -7,6 +7,7 @@
 #include <tetcut/io.hpp>
 #include <tetcut/scene.hpp>
 
+#include <cstdlib>
 #include <fstream>
 #include <sstream>
 #include <string>
@@ -150,6 +151,25 @@ TEST(Scene, IncisionPulledOpenThenClosedBySprings) {
   EXPECT_LT(s.spring_gap_final, 0.05 * s.spring_gap_when_attached) << s.spring_gap_final << " of " << s.spring_gap_when_attached;
 }
 
+TEST(Scene, EmbedsASurfaceFromAnArchive) {
+  testing::TempDir dir;
+  std::filesystem::create_directories(dir / "meshes");
+  // A closed octahedron.
+  dir.write("meshes/octa.off",
+            "OFF\n6 8 0\n1 0 0\n-1 0 0\n0 1 0\n0 -1 0\n0 0 1\n0 0 -1\n"
+            "3 0 2 4\n3 2 1 4\n3 1 3 4\n3 3 0 4\n3 2 0 5\n3 1 2 5\n3 3 1 5\n3 0 3 5\n");
+  const std::string pack = "cd '" + dir.path().string() + "' && tar czf shapes.tar.gz meshes/octa.off";
+  ASSERT_EQ(std::system(pack.c_str()), 0);
+  const std::string time = R"("time": {"duration": 0.1})";
+  const Scene scene = load_scene(write_scene(
+      dir.path(), R"({"embed": {"archive": "shapes.tar.gz", "surface": "meshes/octa.off", "cells": 4}, )" + time + "}"));
+  ASSERT_TRUE(scene.embed_surface.has_value());
+  EXPECT_EQ(scene.embed_surface->num_triangles(), 8);
+  EXPECT_GT(scene.mesh.tets().size(), 0u);
+  EXPECT_NE(load_error(R"({"embed": {"archive": "none.tar.gz", "surface": "a.off"}, )" + time + "}").find("cannot open the archive"),
+            std::string::npos);
+}
+
 TEST(Scene, SolverModesAndScalpelsAreRead) {
   testing::TempDir dir;
   const std::string time = R"("time": {"dt": 0.01, "duration": 0.1})";
@@ -161,6 +181,12 @@ TEST(Scene, SolverModesAndScalpelsAreRead) {
   const Scene budget = load_scene(
       write_scene(dir.path(), std::string("{") + kCube + "," + time + R"(, "solver": {"mode": "real_time", "max_cg_iterations": 5}})"));
   EXPECT_EQ(budget.step.max_cg_iterations, 5);
+  EXPECT_EQ(budget.step.reuse_hessian, sim::StepOptions::real_time(0.01).reuse_hessian);
+  const Scene fresh = load_scene(
+      write_scene(dir.path(), std::string("{") + kCube + "," + time + R"(, "solver": {"mode": "real_time", "reuse_hessian": 1}})"));
+  EXPECT_EQ(fresh.step.reuse_hessian, 1);
+  EXPECT_NE(load_error(std::string("{") + kCube + "," + time + R"(, "solver": {"reuse_hessian": 0}})").find("solver.reuse_hessian"),
+            std::string::npos);
   const Scene blade = load_scene(write_scene(dir.path(), std::string("{") + kCube + "," + time +
                                                            R"(, "scalpels": [{"from": 0, "until": 1, "poses": [[0,0,0, 0,0,1], [1,0,0, 1,0,1]]}]})"));
   ASSERT_EQ(blade.scalpels.size(), 1u);
