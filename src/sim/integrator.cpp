@@ -296,7 +296,10 @@ StepReport Simulator::minimise(const StepOptions& options, bool inertia) {
   // stopped there without moving, the bound from the gradient after a move (dynamic steps).
   double left = inertia ? decrement_bound(s.current_gradient) : 0.0;
   report.assemble_seconds += seconds_since(assemble_start);
-  for (int iteration = 0; iteration < options.max_newton_iterations; ++iteration) {
+  // The budget, and the iterations the safety valve may add to it (rescue_residual).
+  int iterations_allowed = options.max_newton_iterations;
+  const double rescue_bound = options.rescue_residual * options.rescue_residual * scale;
+  for (int iteration = 0; iteration < iterations_allowed; ++iteration) {
     if (!hessian_current) {
       const Clock::time_point t0 = Clock::now();
       energy = potential.evaluate_with_hessian(x, &s.current_gradient);
@@ -372,6 +375,11 @@ StepReport Simulator::minimise(const StepOptions& options, bool inertia) {
       if (left <= threshold) {
         report.converged = true;
         break;
+      }
+      if (iteration + 1 == iterations_allowed && options.rescue_residual > 0 && left > rescue_bound &&
+          iterations_allowed < options.max_newton_iterations + options.rescue_iterations) {
+        ++iterations_allowed;
+        ++report.rescue_iterations;
       }
     }
   }
