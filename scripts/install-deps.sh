@@ -8,6 +8,8 @@ packages=(
   build-essential cmake ninja-build pkg-config
   libeigen3-dev libtbb-dev libgmp-dev
   libcli11-dev nlohmann-json3-dev libfmt-dev libpugixml-dev zlib1g-dev
+  # HTTP and WebSocket for the live session (tetcut serve): Boost.Beast, header-only.
+  libboost-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   # Independent tools the tests cross-check against: TetGen writes meshes we must read, meshio
   # (Debian's Python 3) reads what we write.

@@ -21,5 +21,6 @@ void add_sim_command(CLI::App& app, Action& action);
 void add_render_command(CLI::App& app, Action& action);
 void add_view_command(CLI::App& app, Action& action);
 void add_demo_command(CLI::App& app, Action& action);
+void add_serve_command(CLI::App& app, Action& action);
 
 }  // namespace tetcut::cli

@@ -32,6 +32,7 @@ int main(int argc, char** argv) {
   tetcut::cli::add_render_command(app, action);
   tetcut::cli::add_view_command(app, action);
   tetcut::cli::add_demo_command(app, action);
+  tetcut::cli::add_serve_command(app, action);
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {

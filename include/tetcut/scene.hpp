@@ -58,6 +58,7 @@
 #include <functional>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace tetcut {
@@ -138,6 +139,9 @@ struct Scene {
 /// Reads and validates a scene. Throws Error(kInvalidInput) naming the file and the key path
 /// (e.g. "cuts[2].cylinder.radius") for a missing, unknown or ill-typed key.
 Scene load_scene(const std::filesystem::path& path);
+/// The same from the file's text; `path` names it in errors, and relative paths in it are
+/// relative to its directory.
+Scene parse_scene(std::string_view text, const std::filesystem::path& path);
 
 struct SceneRunOptions {
   int max_frames = -1;  ///< stop after this many output frames (after frame 0); -1: run to the end

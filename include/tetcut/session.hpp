@@ -22,6 +22,7 @@
 
 #include <filesystem>
 #include <memory>
+#include <string>
 #include <vector>
 
 namespace tetcut {
@@ -97,5 +98,7 @@ class Session {
 /// Writes a session's recording: the scene's JSON with its file paths made absolute, the
 /// session's events, and a duration of the session's time, so that `tetcut sim` replays it.
 void write_recording(const std::filesystem::path& path, const Scene& scene, const Session& session);
+/// The recording's text (JSON), as write_recording writes it.
+std::string recording_json(const Scene& scene, const Session& session);
 
 }  // namespace tetcut

@@ -9,5 +9,8 @@ namespace tetcut::view {
 
 extern const std::string_view kViewerPage;
 extern const std::string_view kViewerScript;
+/// The live page of `tetcut serve` ({{CONFIG}} and {{SCRIPT}} slots) and its script (live.js).
+extern const std::string_view kLivePage;
+extern const std::string_view kLiveScript;
 
 }  // namespace tetcut::view

@@ -287,11 +287,17 @@ Json event_json(const SessionEvent& e) {
 }  // namespace
 
 Scene load_scene(const std::filesystem::path& path) {
-  std::ifstream in(path);
+  std::ifstream in(path, std::ios::binary);
   if (!in) throw Error(ErrorKind::kIo, "cannot open the scene file", path.string());
+  std::ostringstream text;
+  text << in.rdbuf();
+  return parse_scene(text.str(), path);
+}
+
+Scene parse_scene(std::string_view text, const std::filesystem::path& path) {
   Json json;
   try {
-    json = Json::parse(in);
+    json = Json::parse(text);
   } catch (const Json::parse_error& e) {
     // nlohmann reports "at line L, column C" in its message.
     throw Error(ErrorKind::kInvalidInput, std::string("not valid JSON: ") + e.what(), path.string());
@@ -357,6 +363,8 @@ Scene load_scene(const std::filesystem::path& path) {
       scene.step.max_cg_iterations = budget.max_cg_iterations;
       scene.step.reuse_hessian = budget.reuse_hessian;
       scene.step.single_precision_matrix = budget.single_precision_matrix;
+      scene.step.rescue_residual = budget.rescue_residual;
+      scene.step.rescue_iterations = budget.rescue_iterations;
     }
     if (const auto v = solver->get("tolerance")) scene.step.tolerance = v->positive();
     if (const auto v = solver->get("max_newton_iterations")) scene.step.max_newton_iterations = v->integer(1);
@@ -650,14 +658,17 @@ SceneSummary run_scene(const Scene& scene, const std::filesystem::path& director
   return SceneRunner(scene, directory, options).run();
 }
 
-void write_recording(const std::filesystem::path& path, const Scene& scene, const Session& session) {
+std::string recording_json(const Scene& scene, const Session& session) {
   Json json = Json::parse(scene.json);
   // Paths in the scene are relative to it: absolute, so the recording replays from anywhere.
   const auto absolute = [&](Json& value) {
     if (value.is_string()) value = std::filesystem::absolute(relative_to(scene.source, value.get<std::string>())).string();
   };
   if (json.contains("mesh") && json["mesh"].contains("file")) absolute(json["mesh"]["file"]);
-  if (json.contains("embed") && json["embed"].contains("surface")) absolute(json["embed"]["surface"]);
+  if (json.contains("embed")) {
+    // An archive's member is a path inside it: the archive is what lies on disk.
+    absolute(json["embed"].contains("archive") ? json["embed"]["archive"] : json["embed"]["surface"]);
+  }
   if (json.contains("cuts")) {
     for (Json& cut : json["cuts"]) {
       if (cut.contains("triangles")) absolute(cut["triangles"]);
@@ -667,7 +678,11 @@ void write_recording(const std::filesystem::path& path, const Scene& scene, cons
   for (const SessionEvent& e : session.recording()) events.push_back(event_json(e));
   json["events"] = std::move(events);
   json["time"]["duration"] = session.time();
-  write_text_file(path, json.dump(2) + "\n");
+  return json.dump(2) + "\n";
+}
+
+void write_recording(const std::filesystem::path& path, const Scene& scene, const Session& session) {
+  write_text_file(path, recording_json(scene, session));
 }
 
 }  // namespace tetcut

@@ -6,23 +6,16 @@
 // controls: { ready, frameCount, frame, setFrame(i), setPieces(on), setTets(on), error }.
 
 import * as THREE from 'three';
-import { OrbitControls } from 'three/examples/jsm/controls/OrbitControls.js';
+import { createView, errorReporter, frameBox, linearOf, surfaceMaterial as makeSurfaceMaterial } from './common.js';
 
 const api = { ready: false, frameCount: 0, frame: 0, error: null };
 window.tetcutViewer = api;
 
-function showError(message) {
-  api.error ??= message;
-  const box = document.getElementById('error');
-  box.textContent = `tetcut viewer: ${api.error}`;
-  box.style.display = 'block';
-}
+const showError = errorReporter(api, 'tetcut viewer');
 function fail(message) {
   showError(message);
   throw new Error(message);
 }
-// Anything else that goes wrong (no WebGL, say) is shown on the page, not only in the console.
-window.addEventListener('error', (event) => showError(event.message));
 
 function decode(base64, Type) {
   if (base64 == null) return null;
@@ -80,27 +73,12 @@ document.getElementById('title').textContent = data.title ?? 'tetcut';
 
 // --- scene -----------------------------------------------------------------------------------
 const container = document.getElementById('view');
-// preserveDrawingBuffer: screenshots (and the tests) read what is on screen.
-const renderer = new THREE.WebGLRenderer({ antialias: true, preserveDrawingBuffer: true });
-renderer.setPixelRatio(window.devicePixelRatio);
-renderer.setSize(container.clientWidth, container.clientHeight);
-renderer.setClearColor(0xf2f2f2);
-container.appendChild(renderer.domElement);
-
-const scene = new THREE.Scene();
-scene.add(new THREE.HemisphereLight(0xffffff, 0x606070, 1.2));
-const sun = new THREE.DirectionalLight(0xffffff, 1.8);
-scene.add(sun);
-
-const camera = new THREE.PerspectiveCamera(35, container.clientWidth / container.clientHeight, 1e-3, 1e3);
-camera.up.set(0, 0, 1);  // tetcut's pictures and scenes are z-up
-const controls = new OrbitControls(camera, renderer.domElement);
+const view = createView(container);  // tetcut's pictures and scenes are z-up
+const { scene, camera, controls } = view;
+const draw = () => view.draw();
 controls.addEventListener('change', draw);
 
-const surfaceMaterial = new THREE.MeshStandardMaterial({
-  vertexColors: true, flatShading: true, side: THREE.DoubleSide, roughness: 0.8, metalness: 0,
-  polygonOffset: true, polygonOffsetFactor: 1, polygonOffsetUnits: 1,  // tet edges stay in front
-});
+const surfaceMaterial = makeSurfaceMaterial();
 const plainColour = new THREE.Color(0xc8c8cd);  // (THREE.Color converts hex from sRGB)
 const edgeMaterial = new THREE.LineBasicMaterial({ color: 0x303040, transparent: true, opacity: 0.45 });
 const surfaceMesh = new THREE.Mesh(new THREE.BufferGeometry(), surfaceMaterial);
@@ -117,18 +95,7 @@ scene.add(surfaceMesh, tetLines);
       box.expandByPoint(new THREE.Vector3(min[0] + 65535 * step[0], min[1] + 65535 * step[1], min[2] + 65535 * step[2]));
     }
   }
-  const centre = box.getCenter(new THREE.Vector3());
-  const radius = Math.max(box.getSize(new THREE.Vector3()).length() / 2, 1e-6);
-  const distance = radius / Math.sin(THREE.MathUtils.degToRad(camera.fov / 2)) * 1.1;
-  const azimuth = THREE.MathUtils.degToRad(35), elevation = THREE.MathUtils.degToRad(25);
-  camera.position.set(centre.x + distance * Math.cos(elevation) * Math.cos(azimuth),
-                      centre.y + distance * Math.cos(elevation) * Math.sin(azimuth),
-                      centre.z + distance * Math.sin(elevation));
-  camera.near = distance / 100;
-  camera.far = distance * 100;
-  camera.updateProjectionMatrix();
-  controls.target.copy(centre);
-  controls.update();
+  frameBox(view, box);
 }
 
 // --- state -----------------------------------------------------------------------------------
@@ -143,12 +110,6 @@ const ui = {
 };
 ui.slider.max = String(frames.length - 1);
 ui.tets.disabled = !frames.some((f) => f.source.f.mesh);
-
-// The colours in the data are sRGB bytes (as in tetcut's PNGs); three.js lights in linear space.
-const linearOf = Float32Array.from({ length: 256 }, (_, i) => {
-  const c = i / 255;
-  return c <= 0.04045 ? c / 12.92 : ((c + 0.055) / 1.055) ** 2.4;
-});
 
 function surfaceColours(frame) {
   if (state.pieces) return new THREE.Float32BufferAttribute(Float32Array.from(frame.colours, (c) => linearOf[c]), 3);
@@ -185,11 +146,6 @@ function show() {
   draw();
 }
 
-function draw() {
-  sun.position.copy(camera.position);  // a headlight: every face the camera sees is lit
-  renderer.render(scene, camera);
-}
-
 api.setFrame = (i) => {
   state.frame = Math.min(Math.max(0, Math.trunc(i)), frames.length - 1);
   show();
@@ -215,12 +171,6 @@ window.addEventListener('keydown', (event) => {
   if (event.key === 'ArrowRight') api.setFrame(state.frame + 1);
   else if (event.key === 'ArrowLeft') api.setFrame(state.frame - 1);
   else if (event.key === ' ') { setPlaying(!state.playing); event.preventDefault(); }
-});
-window.addEventListener('resize', () => {
-  camera.aspect = container.clientWidth / container.clientHeight;
-  camera.updateProjectionMatrix();
-  renderer.setSize(container.clientWidth, container.clientHeight);
-  draw();
 });
 
 api.setFrame(0);

@@ -1,0 +1,81 @@
+#pragma once
+// The live session's wire format (tetcut serve and its page), kept apart from the networking so
+// that it is tested on its own.
+//
+// Server to page, binary (little-endian, every section 4-byte aligned):
+//   topology  u32 kind = 1, version, copies T, nodes N, vertices V, triangles F, pieces P, 0
+//             T x 4 u32   each tet copy's nodes
+//             N u32       each node's piece (pieces: nodes connected through copies, most nodes first)
+//             V u32       the copy each surface vertex is embedded in
+//             V x 4 f32   its barycentric weights in that copy
+//             F x 3 u32   the material surface's triangles (outward)
+//             V x 3 u8    its piece's colour (sRGB), padded to a multiple of 4 bytes
+//   frame     u32 kind = 2, topology version, step, N, P, 0; f64 simulated time;
+//             P x 6 f32   each piece's box: min[3], step[3]
+//             N x 3 u16   node positions, quantised in their piece's box: x = min + q step
+// Boxes are per piece so that a piece falling away does not coarsen the others' positions.
+// The page places the surface's vertices from the nodes (weights times corners), so a frame is
+// 6 bytes a node (16 KB for the default scene's 2.6k nodes), however fine the surface. Topology
+// goes out only when a cut changed it (and to a page that joins).
+//
+// Page to server, JSON text, at most kMaxClientMessage bytes, with an optional increasing "seq"
+// that replies echo:
+//   {"type": "blade", "a": [x,y,z], "b": [x,y,z]}     the scalpel's edge now (world space)
+//   {"type": "lift"}                                  the blade left the material
+//   {"type": "grab", "point": [x,y,z], "stiffness"?}  a hook; answered {"type":"grabbed","hook":k}
+//   {"type": "move_hook", "hook": k, "target": [x,y,z]}
+//   {"type": "release", "hook": k}
+//   {"type": "pin" | "unpin", "point": [x,y,z], "radius": r}
+//   {"type": "pause", "paused": true|false}
+//   {"type": "reset"}
+// Server to page, JSON text: {"type": "stats", ...} (as GET /api/state), {"type": "error",
+// "message", "seq"?}, {"type": "grabbed", ...}, {"type": "reset"} (hooks are gone).
+
+#include <tetcut/cutter.hpp>
+#include <tetcut/session.hpp>
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace tetcut::live {
+
+inline constexpr std::uint32_t kTopologyMessage = 1;
+inline constexpr std::uint32_t kFrameMessage = 2;
+/// Page messages longer than this get an error reply (the longest valid one is ~150 bytes).
+inline constexpr std::size_t kMaxClientMessage = 16 * 1024;
+
+/// What a page asked for, checked for shape and finiteness (the session checks the rest).
+struct ClientCommand {
+  enum class Kind { kEvent, kPause, kReset };
+  Kind kind = Kind::kEvent;
+  SessionEvent event;  ///< kEvent (its time is the session's when applied)
+  bool paused = false;  ///< kPause
+  std::optional<std::int64_t> seq;
+};
+
+/// Parses one page message. Throws Error(kInvalidArgument) with a message for the page
+/// ("not valid JSON: ...", "unknown message type 'x'", "'a' must be 3 finite numbers", ...).
+ClientCommand parse_client_message(std::string_view text);
+
+/// The pieces of a cut mesh: nodes connected through tet copies, numbered by size (most nodes
+/// first, ties by lowest node). O(T).
+struct NodePieces {
+  std::vector<std::uint32_t> node_piece;
+  std::uint32_t count = 0;
+};
+NodePieces node_pieces(const std::vector<std::array<Index, 4>>& copy_nodes, Index num_nodes);
+
+/// A topology message: the copies (`copy_nodes`, as Cutter::tet_nodes), their pieces, and the
+/// surface with each vertex coloured as its piece.
+std::string encode_topology(std::uint32_t version, const std::vector<std::array<Index, 4>>& copy_nodes,
+                            const NodePieces& pieces, const MaterialSurface& surface);
+/// A frame message: node positions quantised to 16 bits in their piece's bounding box.
+std::string encode_frame(std::uint32_t version, std::uint32_t step, double time, const Points& nodes, const NodePieces& pieces);
+
+/// The JSON of an error reply.
+std::string error_message(std::string_view message, std::optional<std::int64_t> seq);
+
+}  // namespace tetcut::live

@@ -1,0 +1,399 @@
+// The live page of `tetcut serve`: a simulated object streamed over a WebSocket, cut with a
+// scalpel, pulled with a hook and pinned with the mouse. The server sends the cut mesh's topology
+// (tet copies, the material surface embedded in them, piece colours) when a cut changes it and
+// the nodes' positions every step; the page places the surface's vertices from the nodes (see
+// src/server/live_protocol.hpp for the messages).
+//
+// For tests and scripting, window.tetcutLive exposes the state and the tools:
+// { ready, connected, framesReceived, topologies, pieces, stats, errors, fps, cutLatencies, tool,
+//   setTool(name), screenOf([x, y, z]), hitAt(x, y), surfaceBox(), recording(), error }.
+
+import * as THREE from 'three';
+import { createView, errorReporter, frameBox, linearOf, surfaceMaterial } from './common.js';
+
+const api = {
+  ready: false, connected: false, framesReceived: 0, topologies: 0, version: 0, pieces: 0,
+  stats: null, errors: [], fps: 0, tool: 'scalpel', error: null,
+  // Milliseconds from a blade pose that cuts (not a stroke's first) leaving the page to the new
+  // topology arriving: how soon a cut is seen.
+  cutLatencies: [],
+};
+let bladeSentAt = null;  // the first cutting blade pose since the last topology
+window.tetcutLive = api;
+const showError = errorReporter(api, 'tetcut live');
+
+const config = JSON.parse(document.getElementById('tetcut-config').textContent);
+const token = new URLSearchParams(window.location.search).get('token') ?? '';
+
+// --- view ------------------------------------------------------------------------------------
+const container = document.getElementById('view');
+const gravity = new THREE.Vector3(...(config.gravity ?? [0, 0, -9.81]));
+// Up is against gravity, so the object stands as it hangs or rests.
+const up = gravity.lengthSq() > 0 ? gravity.clone().negate().normalize() : new THREE.Vector3(0, 0, 1);
+const view = createView(container, up);
+const { scene, camera, controls } = view;
+let dirty = true;
+controls.addEventListener('change', () => { dirty = true; });
+
+const surface = new THREE.Mesh(new THREE.BufferGeometry(), surfaceMaterial());
+surface.visible = false;
+scene.add(surface);
+const markers = new THREE.Group();
+scene.add(markers);
+const markerGeometry = new THREE.SphereGeometry(1, 16, 12);
+const hookMaterial = new THREE.MeshBasicMaterial({ color: 0xd04020 });
+const pinMaterial = new THREE.MeshBasicMaterial({ color: 0x2050c0 });
+const bladeMaterial = new THREE.LineBasicMaterial({ color: 0x202020 });
+const blade = new THREE.Line(new THREE.BufferGeometry(), bladeMaterial);
+blade.visible = false;
+scene.add(blade);
+
+let topology = null;  // the arrays of the latest topology message
+let nodes = null;     // node positions of the latest frame (Float32Array, 3 per node)
+let framed = false;   // the camera has been aimed at the object
+let size = 1;         // the object's radius when first framed: the tools' scale
+
+function fail(message) {
+  showError(message);
+  throw new Error(message);
+}
+
+// --- messages --------------------------------------------------------------------------------
+function readTopology(buffer) {
+  const header = new Uint32Array(buffer, 0, 8);
+  const [, version, copies, nodeCount, vertices, triangles, pieces] = header;
+  let offset = 32;
+  const take = (Type, count) => {
+    if (offset + count * Type.BYTES_PER_ELEMENT > buffer.byteLength) fail('a topology message is shorter than its counts');
+    const array = new Type(buffer, offset, count);
+    offset += count * Type.BYTES_PER_ELEMENT;
+    return array;
+  };
+  const t = {
+    version, pieces, nodeCount, vertices,
+    copyNodes: take(Uint32Array, 4 * copies),
+    nodePiece: take(Uint32Array, nodeCount),
+    vertexCopy: take(Uint32Array, vertices),
+    weights: take(Float32Array, 4 * vertices),
+    triangles: take(Uint32Array, 3 * triangles),
+    colours: take(Uint8Array, 3 * vertices),
+  };
+  // Each vertex's four nodes, once, so that a frame costs 12 multiply-adds a vertex.
+  t.corners = new Uint32Array(4 * vertices);
+  for (let v = 0; v < vertices; ++v) {
+    const copy = t.vertexCopy[v];
+    if (copy >= copies) fail(`vertex ${v} names tet copy ${copy} of ${copies}`);
+    for (let k = 0; k < 4; ++k) {
+      const node = t.copyNodes[4 * copy + k];
+      if (node >= nodeCount) fail(`a tet copy names node ${node} of ${nodeCount}`);
+      t.corners[4 * v + k] = node;
+    }
+  }
+  for (const i of t.triangles) if (i >= vertices) fail(`a triangle names vertex ${i} of ${vertices}`);
+
+  const geometry = new THREE.BufferGeometry();
+  geometry.setAttribute('position', new THREE.BufferAttribute(new Float32Array(3 * vertices), 3));
+  geometry.setAttribute('color', new THREE.Float32BufferAttribute(Float32Array.from(t.colours, (c) => linearOf[c]), 3));
+  geometry.setIndex(new THREE.BufferAttribute(t.triangles, 1));
+  surface.geometry.dispose();
+  surface.geometry = geometry;
+  surface.visible = false;  // until a frame of this topology places it
+  topology = t;
+  api.topologies += 1;
+  if (bladeSentAt !== null) api.cutLatencies.push(performance.now() - bladeSentAt);
+  bladeSentAt = null;
+  api.version = version;
+  api.pieces = pieces;
+}
+
+function readFrame(buffer) {
+  const [, version, , nodeCount, pieces] = new Uint32Array(buffer, 0, 6);
+  if (!topology || version !== topology.version) return;  // a frame of a topology not seen yet
+  if (nodeCount !== topology.nodeCount) fail('a frame has a different number of nodes than its topology');
+  const boxes = new Float32Array(buffer, 32, 6 * pieces);
+  const q = new Uint16Array(buffer, 32 + 24 * pieces, 3 * nodeCount);
+  if (!nodes || nodes.length !== 3 * nodeCount) nodes = new Float32Array(3 * nodeCount);
+  const piece = topology.nodePiece;
+  for (let n = 0; n < nodeCount; ++n) {
+    const b = 6 * piece[n];
+    for (let c = 0; c < 3; ++c) nodes[3 * n + c] = boxes[b + c] + q[3 * n + c] * boxes[b + 3 + c];
+  }
+  const position = surface.geometry.getAttribute('position');
+  const out = position.array, w = topology.weights, corner = topology.corners;
+  for (let v = 0; v < topology.vertices; ++v) {
+    let x = 0, y = 0, z = 0;
+    for (let k = 0; k < 4; ++k) {
+      const weight = w[4 * v + k], node = 3 * corner[4 * v + k];
+      x += weight * nodes[node];
+      y += weight * nodes[node + 1];
+      z += weight * nodes[node + 2];
+    }
+    out[3 * v] = x;
+    out[3 * v + 1] = y;
+    out[3 * v + 2] = z;
+  }
+  position.needsUpdate = true;
+  surface.geometry.boundingSphere = null;  // recomputed when picking
+  surface.geometry.boundingBox = null;
+  surface.visible = true;
+  api.framesReceived += 1;
+  if (!framed) {
+    surface.geometry.computeBoundingBox();
+    size = frameBox(view, surface.geometry.boundingBox, 35, 10).radius;
+    framed = true;
+  }
+  dirty = true;
+}
+
+const ui = {
+  stats: document.getElementById('stats'),
+  message: document.getElementById('message'),
+  pause: document.getElementById('pause'),
+  depth: document.getElementById('depth'),
+};
+
+function readText(text) {
+  const message = JSON.parse(text);
+  if (message.type === 'stats') {
+    api.stats = message;
+    ui.pause.textContent = message.paused ? 'go on' : 'pause';
+  } else if (message.type === 'error') {
+    api.errors.push(message.message);
+    ui.message.textContent = message.message;
+  } else if (message.type === 'grabbed') {
+    hookGrabbed(message);
+  } else if (message.type === 'reset') {
+    drag = null;
+    markers.clear();
+    dirty = true;
+  }
+  showStats();
+}
+
+function showStats() {
+  const s = api.stats;
+  const lines = [`${api.fps.toFixed(0)} frames/s received`];
+  if (s) {
+    lines.push(`${s.steps_per_second.toFixed(0)} steps/s, step ${s.step_ms.toFixed(1)} ms`);
+    lines.push(`cut ${s.cut_ms.toFixed(1)} ms + surface ${s.surface_ms.toFixed(1)} ms`);
+    lines.push(`${s.pieces} piece${s.pieces === 1 ? '' : 's'}, ${s.tets} tets, ${s.nodes} nodes`);
+    lines.push(`${s.surface_triangles} surface triangles`);
+    lines.push(`t = ${s.time.toFixed(2)} s${s.paused ? ' (paused)' : ''}`);
+  }
+  ui.stats.textContent = lines.join('\n');
+}
+
+// --- connection ------------------------------------------------------------------------------
+const socket = new WebSocket(`ws://${window.location.host}/live?token=${encodeURIComponent(token)}`);
+socket.binaryType = 'arraybuffer';
+let seq = 0;
+function send(message) {
+  if (socket.readyState !== WebSocket.OPEN) return -1;
+  message.seq = ++seq;
+  socket.send(JSON.stringify(message));
+  return seq;
+}
+socket.addEventListener('open', () => { api.connected = true; });
+socket.addEventListener('close', () => {
+  api.connected = false;
+  ui.message.textContent = 'the server closed the connection';
+});
+socket.addEventListener('message', (event) => {
+  if (typeof event.data === 'string') return readText(event.data);
+  const kind = new Uint32Array(event.data, 0, 1)[0];
+  if (kind === 1) readTopology(event.data);
+  else if (kind === 2) readFrame(event.data);
+  else fail(`a message of unknown kind ${kind}`);
+});
+
+// Frames received per second, over the last second.
+let counted = 0, countedAt = performance.now();
+setInterval(() => {
+  const now = performance.now();
+  api.fps = (api.framesReceived - counted) / ((now - countedAt) / 1000);
+  counted = api.framesReceived;
+  countedAt = now;
+  showStats();
+}, 1000);
+
+// --- tools -----------------------------------------------------------------------------------
+const raycaster = new THREE.Raycaster();
+function rayAt(event) {
+  const rect = view.renderer.domElement.getBoundingClientRect();
+  const ndc = new THREE.Vector2(((event.clientX - rect.left) / rect.width) * 2 - 1, -((event.clientY - rect.top) / rect.height) * 2 + 1);
+  raycaster.setFromCamera(ndc, camera);
+  return raycaster.ray;
+}
+function pick(event) {
+  if (!surface.visible) return null;
+  rayAt(event);
+  surface.geometry.computeBoundingSphere();
+  const hits = raycaster.intersectObject(surface, false);
+  return hits.length > 0 ? hits[0].point.clone() : null;
+}
+// Where the cursor is on the plane through `point` that faces the camera.
+function onPlane(event, plane) {
+  return rayAt(event).intersectPlane(plane, new THREE.Vector3());
+}
+const xyz = (v) => [v.x, v.y, v.z];
+
+function marker(point, material, radius) {
+  const m = new THREE.Mesh(markerGeometry, material);
+  m.position.copy(point);
+  m.scale.setScalar(radius);
+  markers.add(m);
+  dirty = true;
+  return m;
+}
+
+let drag = null;  // the stroke, hook or pin being made
+const pendingHooks = new Map();  // grab's seq -> the drag waiting for its hook number
+
+function bladeFrom(point) {
+  const depth = Number(ui.depth.value) * size;
+  // From a little in front of the surface point, `depth` into the material along the view.
+  const a = point.clone().addScaledVector(drag.direction, -0.05 * depth);
+  const b = point.clone().addScaledVector(drag.direction, depth);
+  blade.geometry.dispose();
+  blade.geometry = new THREE.BufferGeometry().setFromPoints([a, b]);
+  blade.visible = true;
+  dirty = true;
+  if (send({ type: 'blade', a: xyz(a), b: xyz(b) }) > 0 && drag.poses++ > 0) bladeSentAt ??= performance.now();
+}
+
+function hookGrabbed(message) {
+  const waiting = pendingHooks.get(message.seq);
+  pendingHooks.delete(message.seq);
+  if (!waiting) return;
+  waiting.hook = message.hook;
+  if (waiting.released) send({ type: 'release', hook: message.hook });
+  else if (waiting.target) send({ type: 'move_hook', hook: message.hook, target: xyz(waiting.target) });
+}
+
+function onDown(event) {
+  if (event.button !== 0 || drag) return;
+  const point = pick(event);
+  if (!point) return;  // off the model: the controls orbit
+  event.stopPropagation();  // the orbit controls (on the canvas inside) do not see this drag
+  event.preventDefault();
+  container.setPointerCapture(event.pointerId);
+  const direction = point.clone().sub(camera.position).normalize();
+  const plane = new THREE.Plane().setFromNormalAndCoplanarPoint(direction.clone().negate(), point);
+  if (api.tool === 'scalpel') {
+    drag = { tool: 'scalpel', direction, plane, pointer: event.pointerId, poses: 0 };
+    bladeFrom(point);
+  } else if (api.tool === 'hook') {
+    drag = { tool: 'hook', plane, pointer: event.pointerId, hook: null, target: null, released: false };
+    drag.marker = marker(point, hookMaterial, 0.02 * size);
+    pendingHooks.set(send({ type: 'grab', point: xyz(point) }), drag);
+  } else {
+    const radius = 0.08 * size;
+    if (event.shiftKey) {
+      send({ type: 'unpin', point: xyz(point), radius });
+      for (const m of [...markers.children]) if (m.material === pinMaterial && m.position.distanceTo(point) < radius) markers.remove(m);
+      dirty = true;
+    } else {
+      send({ type: 'pin', point: xyz(point), radius });
+      marker(point, pinMaterial, 0.015 * size);
+    }
+  }
+}
+
+function onMove(event) {
+  if (!drag || event.pointerId !== drag.pointer) return;
+  event.stopPropagation();
+  if (drag.tool === 'scalpel') {
+    // Along the surface where the cursor is on it, on the stroke's plane where it is not.
+    const point = pick(event) ?? onPlane(event, drag.plane);
+    if (point) bladeFrom(point);
+  } else if (drag.tool === 'hook') {
+    const target = onPlane(event, drag.plane);
+    if (!target) return;
+    drag.target = target;
+    drag.marker.position.copy(target);
+    dirty = true;
+    if (drag.hook !== null) send({ type: 'move_hook', hook: drag.hook, target: xyz(target) });
+  }
+}
+
+function onUp(event) {
+  if (!drag || event.pointerId !== drag.pointer) return;
+  event.stopPropagation();
+  if (drag.tool === 'scalpel') {
+    send({ type: 'lift' });
+    blade.visible = false;
+    dirty = true;
+  } else if (drag.tool === 'hook') {
+    if (drag.hook !== null) send({ type: 'release', hook: drag.hook });
+    else drag.released = true;
+    markers.remove(drag.marker);
+    dirty = true;
+  }
+  drag = null;
+}
+
+// Capture phase on the container: the tools see a press before the orbit controls do.
+container.addEventListener('pointerdown', onDown, { capture: true });
+container.addEventListener('pointermove', onMove, { capture: true });
+container.addEventListener('pointerup', onUp, { capture: true });
+container.addEventListener('pointercancel', onUp, { capture: true });
+
+api.setTool = (name) => {
+  if (!['scalpel', 'hook', 'pin'].includes(name)) throw new Error(`no tool '${name}'`);
+  api.tool = name;
+  document.querySelector(`input[name=tool][value=${name}]`).checked = true;
+  container.className = name;
+};
+for (const input of document.querySelectorAll('input[name=tool]')) {
+  input.addEventListener('change', () => api.setTool(input.value));
+}
+api.setTool('scalpel');
+
+document.getElementById('pause').addEventListener('click', () => send({ type: 'pause', paused: !(api.stats?.paused ?? false) }));
+document.getElementById('reset').addEventListener('click', () => send({ type: 'reset' }));
+api.recording = async () => {
+  const response = await fetch(`/api/recording?token=${encodeURIComponent(token)}`);
+  if (!response.ok) throw new Error(`the recording: HTTP ${response.status}`);
+  return response.text();
+};
+document.getElementById('download').addEventListener('click', async () => {
+  const text = await api.recording();
+  const link = document.createElement('a');
+  link.href = URL.createObjectURL(new Blob([text], { type: 'application/json' }));
+  link.download = 'tetcut-recording.json';
+  link.click();
+  setTimeout(() => URL.revokeObjectURL(link.href), 1000);
+});
+window.addEventListener('keydown', (event) => {
+  if (event.key === '1') api.setTool('scalpel');
+  else if (event.key === '2') api.setTool('hook');
+  else if (event.key === '3') api.setTool('pin');
+  else if (event.key === ' ') { document.getElementById('pause').click(); event.preventDefault(); }
+});
+
+// For tests: where a world point is on the page, and the surface's current bounds.
+api.screenOf = ([x, y, z]) => {
+  const p = new THREE.Vector3(x, y, z).project(camera);
+  const rect = view.renderer.domElement.getBoundingClientRect();
+  return { x: rect.left + (p.x + 1) / 2 * rect.width, y: rect.top + (1 - p.y) / 2 * rect.height };
+};
+api.hitAt = (x, y) => {
+  const point = pick({ clientX: x, clientY: y });
+  return point ? xyz(point) : null;
+};
+api.surfaceBox = () => {
+  if (!surface.visible) return null;
+  surface.geometry.computeBoundingBox();
+  const { min, max } = surface.geometry.boundingBox;
+  return { min: xyz(min), max: xyz(max) };
+};
+
+function animate() {
+  if (dirty) {
+    view.draw();
+    dirty = false;
+  }
+  requestAnimationFrame(animate);
+}
+requestAnimationFrame(animate);
+api.ready = true;
