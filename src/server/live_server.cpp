@@ -253,14 +253,17 @@ struct LiveServer::Impl {
       std::deque<std::function<void()>> batch;
       {
         std::unique_lock lock(mutex);
+        // Commands are run as they come (a cut is seen without waiting for the tick); steps
+        // keep to the clock.
         if (paused) {
           wake.wait_for(lock, std::chrono::milliseconds(50), [&] { return stopping || !commands.empty(); });
         } else if (options.real_time) {
-          wake.wait_until(lock, next, [&] { return stopping; });
+          wake.wait_until(lock, next, [&] { return stopping || !commands.empty(); });
         }
         if (stopping) return;
         batch.swap(commands);
       }
+      const bool due = !paused && (!options.real_time || Clock::now() >= next);
       const int cuts_before = session->cuts_applied();
       const std::uint32_t version_before = topology_version;
       for (auto& command : batch) command();
@@ -268,7 +271,7 @@ struct LiveServer::Impl {
       const bool changed = !batch.empty();
       // A cut goes out before the step: it is seen a step sooner.
       if (topology) publish_cut();
-      if (!paused) {
+      if (due) {
         try {
           const SessionStep step = session->advance();
           if (step.topology_changed && !topology) publish_cut();  // the scene's own timed cuts
@@ -287,7 +290,8 @@ struct LiveServer::Impl {
           broadcast_text(live::error_message(std::string("the simulation stopped (reset to go on): ") + e.what(), std::nullopt));
         }
       }
-      if (!paused || changed) publish(nullptr);
+      // A frame for each step, and for commands while paused (a pin, a reset); a cut sent its own.
+      if (due || (paused && changed && !topology)) publish(nullptr);
       blade_received.reset();
       const double window = std::chrono::duration<double>(Clock::now() - window_start).count();
       if (window >= kStatsSeconds || topology || changed) {
@@ -305,7 +309,7 @@ struct LiveServer::Impl {
         }
         if (window >= kStatsSeconds) broadcast_text(std::move(text));
       }
-      next += dt;
+      if (due) next += dt;
       // Fallen behind (a slow step, a reset): start again from now rather than race to catch up.
       if (Clock::now() - next > std::chrono::milliseconds(250) || paused) next = Clock::now();
     }
@@ -674,6 +678,8 @@ void LiveServer::start() {
 void LiveServer::run() {
   impl_->accept();
   impl_->simulation_thread = std::thread([this] { impl_->simulate(); });
+  // A log line to a closed terminal or pipe must not kill the session before it is recorded.
+  std::signal(SIGPIPE, SIG_IGN);
   // Ctrl-C (or a TERM) ends the session cleanly: stop() writes the recording.
   asio::signal_set signals(impl_->io, SIGINT, SIGTERM);
   signals.async_wait([this](beast::error_code ec, int) {

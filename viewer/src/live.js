@@ -17,6 +17,8 @@ const api = {
   // Milliseconds from a blade pose that cuts (not a stroke's first) leaving the page to the new
   // topology arriving: how soon a cut is seen.
   cutLatencies: [],
+  // Milliseconds the page spent reading each topology message, and drawing each frame.
+  topologyMs: [], drawMs: [],
 };
 let bladeSentAt = null;  // the first cutting blade pose since the last topology
 window.tetcutLive = api;
@@ -48,7 +50,8 @@ const blade = new THREE.Line(new THREE.BufferGeometry(), bladeMaterial);
 blade.visible = false;
 scene.add(blade);
 
-let topology = null;  // the arrays of the latest topology message
+let topology = null;  // the arrays of the topology shown
+let pending = null;   // the latest topology message, until a frame of it arrives
 let nodes = null;     // node positions of the latest frame (Float32Array, 3 per node)
 let framed = false;   // the camera has been aimed at the object
 let size = 1;         // the object's radius when first framed: the tools' scale
@@ -89,16 +92,17 @@ function readTopology(buffer) {
       t.corners[4 * v + k] = node;
     }
   }
-  for (const i of t.triangles) if (i >= vertices) fail(`a triangle names vertex ${i} of ${vertices}`);
+  const tri = t.triangles;
+  for (let i = 0; i < tri.length; ++i) if (tri[i] >= vertices) fail(`a triangle names vertex ${tri[i]} of ${vertices}`);
+  const colours = new Float32Array(3 * vertices);
+  for (let i = 0; i < colours.length; ++i) colours[i] = linearOf[t.colours[i]];
 
-  const geometry = new THREE.BufferGeometry();
-  geometry.setAttribute('position', new THREE.BufferAttribute(new Float32Array(3 * vertices), 3));
-  geometry.setAttribute('color', new THREE.Float32BufferAttribute(Float32Array.from(t.colours, (c) => linearOf[c]), 3));
-  geometry.setIndex(new THREE.BufferAttribute(t.triangles, 1));
-  surface.geometry.dispose();
-  surface.geometry = geometry;
-  surface.visible = false;  // until a frame of this topology places it
-  topology = t;
+  t.geometry = new THREE.BufferGeometry();
+  t.geometry.setAttribute('position', new THREE.BufferAttribute(new Float32Array(3 * vertices), 3));
+  t.geometry.setAttribute('color', new THREE.BufferAttribute(colours, 3));
+  t.geometry.setIndex(new THREE.BufferAttribute(t.triangles, 1));
+  // Shown from the first frame of it on; until then the old surface stays (no blank frame).
+  pending = t;
   api.topologies += 1;
   if (bladeSentAt !== null) api.cutLatencies.push(performance.now() - bladeSentAt);
   bladeSentAt = null;
@@ -108,6 +112,12 @@ function readTopology(buffer) {
 
 function readFrame(buffer) {
   const [, version, , nodeCount, pieces] = new Uint32Array(buffer, 0, 6);
+  if (pending && version === pending.version) {
+    surface.geometry.dispose();
+    surface.geometry = pending.geometry;
+    topology = pending;
+    pending = null;
+  }
   if (!topology || version !== topology.version) return;  // a frame of a topology not seen yet
   if (nodeCount !== topology.nodeCount) fail('a frame has a different number of nodes than its topology');
   const boxes = new Float32Array(buffer, 32, 6 * pieces);
@@ -201,7 +211,11 @@ socket.addEventListener('close', () => {
 socket.addEventListener('message', (event) => {
   if (typeof event.data === 'string') return readText(event.data);
   const kind = new Uint32Array(event.data, 0, 1)[0];
-  if (kind === 1) readTopology(event.data);
+  if (kind === 1) {
+    const start = performance.now();
+    readTopology(event.data);
+    api.topologyMs.push(performance.now() - start);
+  }
   else if (kind === 2) readFrame(event.data);
   else fail(`a message of unknown kind ${kind}`);
 });
@@ -249,16 +263,42 @@ function marker(point, material, radius) {
 let drag = null;  // the stroke, hook or pin being made
 const pendingHooks = new Map();  // grab's seq -> the drag waiting for its hook number
 
-function bladeFrom(point) {
+// The blade's edge for the cursor at `point` on the stroke's plane: for a stroke begun on the
+// surface, from a little in front of that depth to `depth` beyond it along the view; for one
+// begun beside the model (the plane through its centre), `depth` centred on the plane.
+function bladeFrom(point, onSurface = true) {
   const depth = Number(ui.depth.value) * size;
-  // From a little in front of the surface point, `depth` into the material along the view.
-  const a = point.clone().addScaledVector(drag.direction, -0.05 * depth);
-  const b = point.clone().addScaledVector(drag.direction, depth);
+  const a = point.clone().addScaledVector(drag.direction, onSurface ? -0.05 * depth : -0.5 * depth);
+  const b = point.clone().addScaledVector(drag.direction, onSurface ? depth : 0.5 * depth);
   blade.geometry.dispose();
   blade.geometry = new THREE.BufferGeometry().setFromPoints([a, b]);
   blade.visible = true;
   dirty = true;
-  if (send({ type: 'blade', a: xyz(a), b: xyz(b) }) > 0 && drag.poses++ > 0) bladeSentAt ??= performance.now();
+  sendBlade({ type: 'blade', a: xyz(a), b: xyz(b), cuts: drag.poses++ > 0 });
+}
+
+// Blade poses go out at most one per kBladeInterval (the server cuts each as it comes, and a
+// pointer moves more often than the simulation steps); the latest pose waits for its turn.
+const kBladeInterval = 30;
+let bladeLastSent = -Infinity, bladeWaiting = null, bladeTimer = null;
+function sendBlade(message) {
+  bladeWaiting = message;
+  const wait = bladeLastSent + kBladeInterval - performance.now();
+  if (wait > 0 && message.cuts) {  // a stroke's first pose goes at once: it is where the cut begins
+    bladeTimer ??= setTimeout(flushBlade, wait);
+    return;
+  }
+  flushBlade();
+}
+function flushBlade() {
+  clearTimeout(bladeTimer);
+  bladeTimer = null;
+  if (!bladeWaiting) return;
+  const cuts = bladeWaiting.cuts;
+  delete bladeWaiting.cuts;
+  if (send(bladeWaiting) > 0 && cuts) bladeSentAt ??= performance.now();
+  bladeWaiting = null;
+  bladeLastSent = performance.now();
 }
 
 function hookGrabbed(message) {
@@ -271,18 +311,26 @@ function hookGrabbed(message) {
 }
 
 function onDown(event) {
-  if (event.button !== 0 || drag) return;
-  const point = pick(event);
-  if (!point) return;  // off the model: the controls orbit
-  event.stopPropagation();  // the orbit controls (on the canvas inside) do not see this drag
+  if (event.button !== 0 || drag || !surface.visible) return;  // the other buttons orbit and pan
+  const hit = pick(event);
+  // The scalpel may start off the model (a stroke from outside across it); hook and pin need it.
+  if (!hit && api.tool !== 'scalpel') return;
   event.preventDefault();
   container.setPointerCapture(event.pointerId);
+  if (api.tool === 'scalpel') {
+    const direction = rayAt(event).direction.clone();
+    // The stroke keeps the depth where it began: the picked surface point's, or (begun beside
+    // the model) the object's centre's.
+    const plane = new THREE.Plane().setFromNormalAndCoplanarPoint(direction.clone().negate(), hit ?? controls.target);
+    drag = { tool: 'scalpel', direction, plane, onSurface: hit !== null, pointer: event.pointerId, poses: 0 };
+    const point = hit ?? onPlane(event, plane);
+    if (point) bladeFrom(point, drag.onSurface);
+    return;
+  }
+  const point = hit;
   const direction = point.clone().sub(camera.position).normalize();
   const plane = new THREE.Plane().setFromNormalAndCoplanarPoint(direction.clone().negate(), point);
-  if (api.tool === 'scalpel') {
-    drag = { tool: 'scalpel', direction, plane, pointer: event.pointerId, poses: 0 };
-    bladeFrom(point);
-  } else if (api.tool === 'hook') {
+  if (api.tool === 'hook') {
     drag = { tool: 'hook', plane, pointer: event.pointerId, hook: null, target: null, released: false };
     drag.marker = marker(point, hookMaterial, 0.02 * size);
     pendingHooks.set(send({ type: 'grab', point: xyz(point) }), drag);
@@ -301,11 +349,12 @@ function onDown(event) {
 
 function onMove(event) {
   if (!drag || event.pointerId !== drag.pointer) return;
-  event.stopPropagation();
   if (drag.tool === 'scalpel') {
-    // Along the surface where the cursor is on it, on the stroke's plane where it is not.
-    const point = pick(event) ?? onPlane(event, drag.plane);
-    if (point) bladeFrom(point);
+    // Along the surface where the cursor is on it, about the object's centre where it is not.
+    // On the plane the stroke began in (no picking as it moves: a ray against the whole
+    // surface costs more than a frame on a fine surface).
+    const point = onPlane(event, drag.plane);
+    if (point) bladeFrom(point, drag.onSurface);
   } else if (drag.tool === 'hook') {
     const target = onPlane(event, drag.plane);
     if (!target) return;
@@ -318,8 +367,8 @@ function onMove(event) {
 
 function onUp(event) {
   if (!drag || event.pointerId !== drag.pointer) return;
-  event.stopPropagation();
   if (drag.tool === 'scalpel') {
+    flushBlade();
     send({ type: 'lift' });
     blade.visible = false;
     dirty = true;
@@ -332,7 +381,9 @@ function onUp(event) {
   drag = null;
 }
 
-// Capture phase on the container: the tools see a press before the orbit controls do.
+// The left button is the tool's; the orbit controls take the right (orbit) and the middle (pan).
+controls.mouseButtons = { LEFT: null, MIDDLE: THREE.MOUSE.PAN, RIGHT: THREE.MOUSE.ROTATE };
+container.addEventListener('contextmenu', (event) => event.preventDefault());
 container.addEventListener('pointerdown', onDown, { capture: true });
 container.addEventListener('pointermove', onMove, { capture: true });
 container.addEventListener('pointerup', onUp, { capture: true });
@@ -390,7 +441,10 @@ api.surfaceBox = () => {
 
 function animate() {
   if (dirty) {
+    const start = performance.now();
     view.draw();
+    view.renderer.getContext().finish();  // the drawing's own time, not the next frame's
+    if (api.drawMs.length < 10000) api.drawMs.push(performance.now() - start);
     dirty = false;
   }
   requestAnimationFrame(animate);
