@@ -26,8 +26,10 @@ const browserPath = argument('chromium', '/usr/bin/chromium');
 const sleep = (ms) => new Promise((resolve) => setTimeout(resolve, ms));
 
 let failures = 0;
+const started = Date.now();
 function check(condition, message) {
-  console.log(`${condition ? 'ok  ' : 'FAIL'} ${message}`);
+  const at = ((Date.now() - started) / 1000).toFixed(1).padStart(5);
+  console.log(`${condition ? 'ok  ' : 'FAIL'} ${at} s  ${message}`);
   if (!condition) failures += 1;
 }
 const median = (values) => {
@@ -102,9 +104,19 @@ async function rowAcross(t) {
     const centre = [(min[0] + max[0]) / 2, (min[1] + max[1]) / 2, min[2] + t * (max[2] - min[2])];
     const { y } = api.screenOf(centre);
     if (!Number.isFinite(y)) return { error: `the surface's box is ${JSON.stringify({ min, max })}` };
+    // A coarse scan, then each edge found to a pixel by bisection (a ray against the whole
+    // surface costs milliseconds).
     const hits = [];
-    for (let x = 0; x < window.innerWidth; x += 2) if (api.hitAt(x, y)) hits.push(x);
-    return hits.length ? { y, left: hits[0], right: hits[hits.length - 1] } : null;
+    for (let x = 0; x < window.innerWidth; x += 12) if (api.hitAt(x, y)) hits.push(x);
+    if (!hits.length) return null;
+    const edge = (inside, outside) => {
+      while (Math.abs(inside - outside) > 1) {
+        const mid = Math.round((inside + outside) / 2);
+        if (api.hitAt(mid, y)) inside = mid; else outside = mid;
+      }
+      return inside;
+    };
+    return { y, left: edge(hits[0], hits[0] - 12), right: edge(hits[hits.length - 1], hits[hits.length - 1] + 12) };
   }, t);
   if (row?.error) {
     await page.screenshot({ path: path.join(work, `failed_${Date.now()}.png`) });
