@@ -16,11 +16,20 @@ export function errorReporter(api, label) {
   return show;
 }
 
+// Whether WebGL draws on the CPU (SwiftShader, llvmpipe: no GPU, as on servers and in CI).
+export function softwareRenderer() {
+  const gl = document.createElement('canvas').getContext('webgl');
+  const info = gl?.getExtension('WEBGL_debug_renderer_info');
+  const name = info ? gl.getParameter(info.UNMASKED_RENDERER_WEBGL) : '';
+  gl?.getExtension('WEBGL_lose_context')?.loseContext();
+  return /swiftshader|llvmpipe|softpipe|software/i.test(String(name));
+}
+
 // A renderer in `container`, a scene lit by a sky light and a headlight, a camera with orbit
 // controls. `draw()` renders once.
-export function createView(container, up = new THREE.Vector3(0, 0, 1)) {
+export function createView(container, up = new THREE.Vector3(0, 0, 1), { antialias = true } = {}) {
   // preserveDrawingBuffer: screenshots (and the tests) read what is on screen.
-  const renderer = new THREE.WebGLRenderer({ antialias: true, preserveDrawingBuffer: true });
+  const renderer = new THREE.WebGLRenderer({ antialias, preserveDrawingBuffer: true });
   renderer.setPixelRatio(window.devicePixelRatio);
   renderer.setSize(container.clientWidth, container.clientHeight);
   renderer.setClearColor(0xf2f2f2);

@@ -24,6 +24,8 @@ const tetcut = path.resolve(argument('tetcut'));
 const work = path.resolve(argument('work'));
 const browserPath = argument('chromium', '/usr/bin/chromium');
 const sleep = (ms) => new Promise((resolve) => setTimeout(resolve, ms));
+// A timeout that does not keep the process alive once everything else is done.
+const deadline = (ms) => new Promise((resolve) => setTimeout(resolve, ms).unref());
 
 let failures = 0;
 const started = Date.now();
@@ -266,7 +268,7 @@ await browser.close();
 
 // --- Ctrl-C --------------------------------------------------------------------------------------
 server.kill('SIGINT');
-const exit = await Promise.race([serverExit, sleep(30_000).then(() => null)]);
+const exit = await Promise.race([serverExit, deadline(30_000).then(() => null)]);
 check(exit !== null && exit.code === 0, `Ctrl-C stopped the server cleanly (${JSON.stringify(exit)})`);
 check(existsSync(serverRecording), 'and it wrote its --record file');
 writeFileSync(path.join(work, 'server.log'), serverOutput);
