@@ -37,12 +37,12 @@ void add_serve_command(CLI::App& app, Action& action) {
   command->add_option("--record", options->record, "Write the session's events here on exit: a scene that tetcut sim replays");
   command->callback([options, &action] {
     action = [options] {
-      const auto start = std::chrono::steady_clock::now();
-      const Scene scene = options->scene.empty() ? parse_scene(kDefaultLiveScene, "default live scene (examples/live-femur.json)")
-                                                 : load_scene(options->scene);
       if (!options->record.empty() && options->record.extension() != ".json") {
         throw Error(ErrorKind::kInvalidArgument, "the recording is a scene file: it must end in .json", options->record.string());
       }
+      const auto start = std::chrono::steady_clock::now();
+      const Scene scene = options->scene.empty() ? parse_scene(kDefaultLiveScene, "default live scene (examples/live-femur.json)")
+                                                 : load_scene(options->scene);
       LiveServerOptions server_options;
       server_options.host = options->host;
       server_options.port = static_cast<std::uint16_t>(options->port);

@@ -20,6 +20,17 @@ expect_exit 2 "$TETCUT" grid --cells 2 2 2 -o x.txt
 expect_stderr "x.txt"
 [[ ! -e x.vtu && ! -e x.txt ]] || fail "a failed command left an output"
 
+# serve: bad arguments are refused before anything listens (the server itself: tests/server).
+expect_exit 0 "$TETCUT" serve --help
+expect_stdout "--record"
+expect_exit 2 "$TETCUT" serve missing_scene.json --port 0
+expect_stderr "missing_scene.json: cannot open the scene file"
+expect_exit 2 "$TETCUT" serve --host not-an-address --port 0
+expect_stderr "not an IP address: 'not-an-address'"
+expect_exit 2 "$TETCUT" serve --record take.txt --port 0
+expect_stderr "take.txt: the recording is a scene file"
+expect_exit 2 "$TETCUT" serve --port 70000
+
 # grid and bcc write meshes that info reads back with the expected numbers.
 expect_exit 0 "$TETCUT" grid --cells 4 4 4 -o cube.vtu
 expect_exit 0 "$TETCUT" info --json cube.vtu
