@@ -358,13 +358,10 @@ Scene parse_scene(std::string_view text, const std::filesystem::path& path) {
   if (const auto solver = root.get("solver")) {
     solver->allow({"mode", "tolerance", "max_newton_iterations", "max_cg_iterations", "reuse_hessian", "linear"});
     if (const auto mode = solver->get("mode"); mode && mode->choice({"converged", "real_time"}) == "real_time") {
-      const sim::StepOptions budget = sim::StepOptions::real_time(scene.step.dt);
-      scene.step.max_newton_iterations = budget.max_newton_iterations;
-      scene.step.max_cg_iterations = budget.max_cg_iterations;
-      scene.step.reuse_hessian = budget.reuse_hessian;
-      scene.step.single_precision_matrix = budget.single_precision_matrix;
-      scene.step.rescue_residual = budget.rescue_residual;
-      scene.step.rescue_iterations = budget.rescue_iterations;
+      // The whole budget, keeping what the scene set before it (gravity; dt is real_time's own).
+      const Vec3 gravity = scene.step.gravity;
+      scene.step = sim::StepOptions::real_time(scene.step.dt);
+      scene.step.gravity = gravity;
     }
     if (const auto v = solver->get("tolerance")) scene.step.tolerance = v->positive();
     if (const auto v = solver->get("max_newton_iterations")) scene.step.max_newton_iterations = v->integer(1);

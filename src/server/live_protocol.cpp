@@ -12,7 +12,8 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
-#include <numeric>
+
+#include "util/union_find.hpp"
 
 namespace tetcut::live {
 namespace {
@@ -119,24 +120,15 @@ ClientCommand parse_client_message(std::string_view text) {
 }
 
 NodePieces node_pieces(const std::vector<std::array<Index, 4>>& copy_nodes, Index num_nodes) {
-  // Union-find over the nodes, joined through each copy's corners.
-  std::vector<Index> parent(static_cast<std::size_t>(num_nodes));
-  std::iota(parent.begin(), parent.end(), Index{0});
-  const auto root = [&](Index n) {
-    while (parent[n] != n) n = parent[n] = parent[parent[n]];
-    return n;
-  };
+  UnionFind classes(static_cast<std::size_t>(num_nodes));
   for (const auto& copy : copy_nodes) {
-    for (int k = 1; k < 4; ++k) {
-      const Index a = root(copy[0]), b = root(copy[k]);
-      if (a != b) parent[std::max(a, b)] = std::min(a, b);
-    }
+    for (int k = 1; k < 4; ++k) classes.join(copy[0], copy[k]);
   }
   std::vector<Index> size(static_cast<std::size_t>(num_nodes), 0);
-  for (Index n = 0; n < num_nodes; ++n) ++size[root(n)];
+  for (Index n = 0; n < num_nodes; ++n) ++size[classes.find(n)];
   std::vector<Index> roots;
   for (Index n = 0; n < num_nodes; ++n) {
-    if (root(n) == n) roots.push_back(n);
+    if (classes.find(n) == n) roots.push_back(n);
   }
   std::stable_sort(roots.begin(), roots.end(), [&](Index a, Index b) { return size[a] > size[b]; });
   std::vector<std::uint32_t> number(static_cast<std::size_t>(num_nodes), 0);
@@ -144,7 +136,7 @@ NodePieces node_pieces(const std::vector<std::array<Index, 4>>& copy_nodes, Inde
   NodePieces out;
   out.count = static_cast<std::uint32_t>(roots.size());
   out.node_piece.resize(static_cast<std::size_t>(num_nodes));
-  for (Index n = 0; n < num_nodes; ++n) out.node_piece[n] = number[root(n)];
+  for (Index n = 0; n < num_nodes; ++n) out.node_piece[n] = number[classes.find(n)];
   return out;
 }
 
