@@ -92,6 +92,31 @@ struct Session::State {
   Vec3 rest_of(Index node) const { return cutter.input().rest().row(cutter.node_parent()[node]).transpose(); }
   double dt() const { return scene.step.dt; }
   double now() const { return steps * dt(); }
+  // Records a live event of `kind` at the time now; the caller fills in the rest.
+  SessionEvent& record(SessionEvent::Kind kind) {
+    SessionEvent& e = recording.emplace_back();
+    e.kind = kind;
+    e.time = now();
+    return e;
+  }
+  // Pins (on) or lets go of the nodes within `radius` of `point`, and records it.
+  void set_pinned(const Vec3& p, double radius, bool on, const char* what) {
+    check_finite(p, what);
+    if (!(radius > 0) || !std::isfinite(radius)) throw Error(ErrorKind::kInvalidArgument, std::string(what) + ": the radius must be positive");
+    for (Index n = 0; n < sim.num_nodes(); ++n) {
+      if ((on || pinned[n]) && (sim.positions().row(n).transpose() - p).norm() <= radius) {
+        pinned[n] = on;
+        if (on) {
+          sim.pin(n);
+        } else {
+          sim.release(n);
+        }
+      }
+    }
+    SessionEvent& e = record(on ? SessionEvent::Kind::kPin : SessionEvent::Kind::kUnpin);
+    e.point = p;
+    e.radius = radius;
+  }
 
   CutResult& whole_result() {
     if (!result) {
@@ -281,6 +306,14 @@ struct Session::State {
     bool held;
   };
 
+  // The hook `hook` names, which must be held; `what` names the event in the error.
+  Hook& held_hook(int hook, const char* what) {
+    if (hook < 0 || hook >= static_cast<int>(hooks.size()) || !hooks[hook].held) {
+      throw Error(ErrorKind::kInvalidArgument, std::string(what) + ": no hook " + std::to_string(hook) + " is held");
+    }
+    return hooks[hook];
+  }
+
   const Scene& scene;
   Cutter cutter;
   std::optional<CutResult> result;
@@ -371,16 +404,13 @@ void Session::blade(const BladePose& pose) {
   s.pending.cut += seconds_since(start);
   if (s.blade_rest) s.cut_strip(*s.blade_rest, rest);
   s.blade_rest = rest;
-  s.recording.push_back({SessionEvent::Kind::kBlade, s.now(), pose});
+  s.record(SessionEvent::Kind::kBlade).pose = pose;
 }
 
 void Session::lift_blade() {
   State& s = *state_;
   s.blade_rest.reset();
-  SessionEvent e;
-  e.kind = SessionEvent::Kind::kLiftBlade;
-  e.time = s.now();
-  s.recording.push_back(e);
+  s.record(SessionEvent::Kind::kLiftBlade);
 }
 
 int Session::grab(const Vec3& point, double stiffness) {
@@ -420,80 +450,33 @@ int Session::grab(const Vec3& point, double stiffness) {
   hook.held = true;
   s.hooks.push_back(hook);
   s.set_anchors();
-  SessionEvent e;
-  e.kind = SessionEvent::Kind::kGrab;
-  e.time = s.now();
+  SessionEvent& e = s.record(SessionEvent::Kind::kGrab);
   e.point = point;
   e.stiffness = stiffness;
-  s.recording.push_back(e);
   return static_cast<int>(s.hooks.size()) - 1;
 }
 
 void Session::move_hook(int hook, const Vec3& target) {
   State& s = *state_;
-  if (hook < 0 || hook >= static_cast<int>(s.hooks.size()) || !s.hooks[hook].held) {
-    throw Error(ErrorKind::kInvalidArgument, "move_hook: no hook " + std::to_string(hook) + " is held");
-  }
+  State::Hook& held = s.held_hook(hook, "move_hook");
   check_finite(target, "move_hook");
-  s.hooks[hook].target = target;
+  held.target = target;
   s.set_anchors();
-  SessionEvent e;
-  e.kind = SessionEvent::Kind::kMoveHook;
-  e.time = s.now();
+  SessionEvent& e = s.record(SessionEvent::Kind::kMoveHook);
   e.hook = hook;
   e.point = target;
-  s.recording.push_back(e);
 }
 
 void Session::release(int hook) {
   State& s = *state_;
-  if (hook < 0 || hook >= static_cast<int>(s.hooks.size()) || !s.hooks[hook].held) {
-    throw Error(ErrorKind::kInvalidArgument, "release: no hook " + std::to_string(hook) + " is held");
-  }
-  s.hooks[hook].held = false;
+  s.held_hook(hook, "release").held = false;
   s.set_anchors();
-  SessionEvent e;
-  e.kind = SessionEvent::Kind::kRelease;
-  e.time = s.now();
-  e.hook = hook;
-  s.recording.push_back(e);
+  s.record(SessionEvent::Kind::kRelease).hook = hook;
 }
 
-void Session::pin(const Vec3& point, double radius) {
-  State& s = *state_;
-  check_finite(point, "pin");
-  if (!(radius > 0) || !std::isfinite(radius)) throw Error(ErrorKind::kInvalidArgument, "pin: the radius must be positive");
-  for (Index n = 0; n < s.sim.num_nodes(); ++n) {
-    if ((s.sim.positions().row(n).transpose() - point).norm() <= radius) {
-      s.pinned[n] = 1;
-      s.sim.pin(n);
-    }
-  }
-  SessionEvent e;
-  e.kind = SessionEvent::Kind::kPin;
-  e.time = s.now();
-  e.point = point;
-  e.radius = radius;
-  s.recording.push_back(e);
-}
+void Session::pin(const Vec3& point, double radius) { state_->set_pinned(point, radius, true, "pin"); }
 
-void Session::unpin(const Vec3& point, double radius) {
-  State& s = *state_;
-  check_finite(point, "unpin");
-  if (!(radius > 0) || !std::isfinite(radius)) throw Error(ErrorKind::kInvalidArgument, "unpin: the radius must be positive");
-  for (Index n = 0; n < s.sim.num_nodes(); ++n) {
-    if (s.pinned[n] && (s.sim.positions().row(n).transpose() - point).norm() <= radius) {
-      s.pinned[n] = 0;
-      s.sim.release(n);
-    }
-  }
-  SessionEvent e;
-  e.kind = SessionEvent::Kind::kUnpin;
-  e.time = s.now();
-  e.point = point;
-  e.radius = radius;
-  s.recording.push_back(e);
-}
+void Session::unpin(const Vec3& point, double radius) { state_->set_pinned(point, radius, false, "unpin"); }
 
 void Session::apply(const SessionEvent& e) {
   switch (e.kind) {
