@@ -28,19 +28,15 @@
 #include <vector>
 
 #include "server/live_protocol.hpp"
+#include "step_times.hpp"
 
 namespace {
 
 using tetcut::Index;
 using tetcut::Vec3;
-using Clock = std::chrono::steady_clock;
-double ms_since(Clock::time_point start) { return std::chrono::duration<double, std::milli>(Clock::now() - start).count(); }
-
-double percentile(std::vector<double> v, double p) {
-  if (v.empty()) return 0;
-  std::sort(v.begin(), v.end());
-  return v[std::min(v.size() - 1, static_cast<std::size_t>(p * static_cast<double>(v.size() - 1) + 0.5))];
-}
+using tetcut::bench::Clock;
+using tetcut::bench::ms_since;
+using tetcut::bench::percentile;
 
 struct Phase {
   explicit Phase(std::string n) : name(std::move(n)) {}

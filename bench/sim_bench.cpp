@@ -28,20 +28,16 @@
 #include <string>
 #include <vector>
 
+#include "step_times.hpp"
+
 namespace {
 
 using tetcut::Index;
 using tetcut::Vec3;
-using Clock = std::chrono::steady_clock;
-double ms_since(Clock::time_point start) { return std::chrono::duration<double, std::milli>(Clock::now() - start).count(); }
-
-double percentile(std::vector<double> v, double p) {
-  if (v.empty()) return 0;
-  std::sort(v.begin(), v.end());
-  const std::size_t i = std::min(v.size() - 1, static_cast<std::size_t>(p * static_cast<double>(v.size() - 1) + 0.5));
-  return v[i];
-}
-double median(const std::vector<double>& v) { return percentile(v, 0.5); }
+using tetcut::bench::Clock;
+using tetcut::bench::median;
+using tetcut::bench::ms_since;
+using tetcut::bench::percentile;
 
 struct Block {
   double spacing;
