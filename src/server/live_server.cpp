@@ -330,6 +330,11 @@ struct LiveServer::Impl {
 
   void accept();
   void shut_down_network();
+  // Accepting connections (on the network thread, once it runs) and simulating (on its own).
+  void begin() {
+    accept();
+    simulation_thread = std::thread([this] { simulate(); });
+  }
 };
 
 // --- a page's WebSocket ------------------------------------------------------------------------
@@ -670,14 +675,12 @@ std::string LiveServer::state_json() const {
 }
 
 void LiveServer::start() {
-  impl_->accept();
-  impl_->simulation_thread = std::thread([this] { impl_->simulate(); });
+  impl_->begin();
   impl_->network_thread = std::thread([this] { impl_->io.run(); });
 }
 
 void LiveServer::run() {
-  impl_->accept();
-  impl_->simulation_thread = std::thread([this] { impl_->simulate(); });
+  impl_->begin();
   // A log line to a closed terminal or pipe must not kill the session before it is recorded.
   std::signal(SIGPIPE, SIG_IGN);
   // Ctrl-C (or a TERM) ends the session cleanly: stop() writes the recording.

@@ -5,29 +5,16 @@
 //
 //   node viewer/test/e2e.mjs --tetcut build/release/bin/tetcut --scene examples/fig3-progressive-tet.json --work DIR
 
-import { chromium } from 'playwright-core';
+import { argument, check, failed, launchBrowser } from './harness.mjs';
 import { execFileSync } from 'node:child_process';
 import { existsSync, mkdirSync, rmSync, statSync } from 'node:fs';
 import path from 'node:path';
 import { pathToFileURL } from 'node:url';
 
-function argument(name, fallback) {
-  const i = process.argv.indexOf(`--${name}`);
-  if (i >= 0 && i + 1 < process.argv.length) return process.argv[i + 1];
-  if (fallback === undefined) throw new Error(`missing --${name}`);
-  return fallback;
-}
-
 const tetcut = path.resolve(argument('tetcut'));
 const scene = path.resolve(argument('scene'));
 const work = path.resolve(argument('work'));
 const browserPath = argument('chromium', '/usr/bin/chromium');
-
-let failures = 0;
-function check(condition, message) {
-  console.log(`${condition ? 'ok  ' : 'FAIL'} ${message}`);
-  if (!condition) failures += 1;
-}
 
 rmSync(work, { recursive: true, force: true });
 mkdirSync(work, { recursive: true });
@@ -41,11 +28,7 @@ check(existsSync(page_path) && statSync(page_path).size > 100_000, 'tetcut view 
 // A page made from a single mesh file (no frames to step), with the tet edges on by a control.
 execFileSync(tetcut, ['view', path.join(simDir, 'mesh_0000.vtu'), '-o', path.join(work, 'mesh.html')], { stdio: 'inherit' });
 
-const browser = await chromium.launch({
-  executablePath: browserPath,
-  // No GPU in CI: WebGL through SwiftShader, Chromium's software renderer.
-  args: ['--use-angle=swiftshader', '--enable-unsafe-swiftshader', '--ignore-gpu-blocklist'],
-});
+const browser = await launchBrowser(browserPath);
 
 // Statistics of a screenshot of the 3D view, decoded by the browser itself in a blank page;
 // with `reference` (an earlier result), also how many pixels changed from it.
@@ -184,8 +167,8 @@ try {
   await browser.close();
 }
 
-if (failures > 0) {
-  console.error(`${failures} check(s) failed`);
+if (failed() > 0) {
+  console.error(`${failed()} check(s) failed`);
   process.exit(1);
 }
 console.log('viewer end-to-end: all checks passed');

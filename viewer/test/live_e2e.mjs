@@ -8,17 +8,10 @@
 //
 //   node viewer/test/live_e2e.mjs --tetcut build/release/bin/tetcut --work DIR
 
-import { chromium } from 'playwright-core';
+import { argument, check, failed, launchBrowser } from './harness.mjs';
 import { execFileSync, spawn } from 'node:child_process';
 import { existsSync, mkdirSync, readFileSync, rmSync, writeFileSync } from 'node:fs';
 import path from 'node:path';
-
-function argument(name, fallback) {
-  const i = process.argv.indexOf(`--${name}`);
-  if (i >= 0 && i + 1 < process.argv.length) return process.argv[i + 1];
-  if (fallback === undefined) throw new Error(`missing --${name}`);
-  return fallback;
-}
 
 const tetcut = path.resolve(argument('tetcut'));
 const work = path.resolve(argument('work'));
@@ -27,13 +20,6 @@ const sleep = (ms) => new Promise((resolve) => setTimeout(resolve, ms));
 // A timeout that does not keep the process alive once everything else is done.
 const deadline = (ms) => new Promise((resolve) => setTimeout(resolve, ms).unref());
 
-let failures = 0;
-const started = Date.now();
-function check(condition, message) {
-  const at = ((Date.now() - started) / 1000).toFixed(1).padStart(5);
-  console.log(`${condition ? 'ok  ' : 'FAIL'} ${at} s  ${message}`);
-  if (!condition) failures += 1;
-}
 const median = (values) => {
   const sorted = [...values].sort((a, b) => a - b);
   return sorted.length ? sorted[Math.floor(sorted.length / 2)] : NaN;
@@ -66,11 +52,7 @@ check((await fetch(`${base.origin}/`)).status === 403, 'the page without the tok
 check((await fetch(`${base.origin}/?token=0123`)).status === 403, 'the page with a wrong token: 403');
 check((await fetch(`${base.origin}/api/state`)).status === 403, '/api/state without the token: 403');
 
-const browser = await chromium.launch({
-  executablePath: browserPath,
-  // No GPU in CI: WebGL through SwiftShader, Chromium's software renderer.
-  args: ['--use-angle=swiftshader', '--enable-unsafe-swiftshader', '--ignore-gpu-blocklist'],
-});
+const browser = await launchBrowser(browserPath);
 const context = await browser.newContext({ viewport: { width: 1000, height: 700 }, acceptDownloads: true });
 const offMachine = [];
 await context.route('**/*', (route) => {
@@ -277,9 +259,9 @@ const summary = { idle_fps: idleFps, cutting_fps: cutFps, cut_latency_ms_median:
                   server_steps_per_second: serverState.steps_per_second, server_cut_latency_ms: serverState.cut_latency_ms,
                   page_topology_ms_median: median(pageTimes.topology), page_draw_ms_median: median(pageTimes.draw) };
 writeFileSync(path.join(work, 'live_summary.json'), JSON.stringify(summary, null, 2));
-if (failures > 0) {
+if (failed() > 0) {
   console.log(serverOutput);
-  console.log(`${failures} check(s) failed`);
+  console.log(`${failed()} check(s) failed`);
   process.exit(1);
 }
 console.log('all checks passed');
