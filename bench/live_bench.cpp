@@ -60,11 +60,7 @@ int main(int argc, char** argv) {
   std::uint32_t version = 0;
   tetcut::live::NodePieces pieces;
   // The server's work after a cut: the surface, the pieces, the topology message.
-  const auto topology = [&] {
-    const tetcut::Cutter& cutter = session.cutter();
-    pieces = tetcut::live::node_pieces(cutter.tet_nodes(), cutter.num_nodes());
-    return tetcut::live::encode_topology(++version, cutter.tet_nodes(), pieces, session.surface());
-  };
+  const auto topology = [&] { return tetcut::live::encode_topology(++version, session, &pieces); };
   std::size_t topology_bytes = topology().size();
 
   // The femur's box, for the scripted hand.

@@ -171,6 +171,12 @@ std::string encode_topology(std::uint32_t version, const std::vector<std::array<
   return out;
 }
 
+std::string encode_topology(std::uint32_t version, Session& session, NodePieces* pieces) {
+  const Cutter& cutter = session.cutter();
+  *pieces = node_pieces(cutter.tet_nodes(), cutter.num_nodes());
+  return encode_topology(version, cutter.tet_nodes(), *pieces, session.surface());
+}
+
 std::string encode_frame(std::uint32_t version, std::uint32_t step, double time, const Points& nodes, const NodePieces& pieces) {
   const std::size_t count = pieces.count;
   std::string out;

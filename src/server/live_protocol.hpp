@@ -72,6 +72,9 @@ NodePieces node_pieces(const std::vector<std::array<Index, 4>>& copy_nodes, Inde
 /// surface with each vertex coloured as its piece.
 std::string encode_topology(std::uint32_t version, const std::vector<std::array<Index, 4>>& copy_nodes,
                             const NodePieces& pieces, const MaterialSurface& surface);
+/// The topology message of a session as it stands (its cutter's copies and its material
+/// surface); sets `pieces`, which its frames quantise by.
+std::string encode_topology(std::uint32_t version, Session& session, NodePieces* pieces);
 /// A frame message: node positions quantised to 16 bits in their piece's bounding box.
 std::string encode_frame(std::uint32_t version, std::uint32_t step, double time, const Points& nodes, const NodePieces& pieces);
 

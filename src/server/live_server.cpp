@@ -192,11 +192,7 @@ struct LiveServer::Impl {
   void broadcast_text(std::string text);
 
   void publish_topology_and_frame() {
-    const Cutter& cutter = session->cutter();
-    pieces = live::node_pieces(cutter.tet_nodes(), cutter.num_nodes());
-    auto topology = std::make_shared<const std::string>(
-        live::encode_topology(++topology_version, cutter.tet_nodes(), pieces, session->surface()));
-    publish(std::move(topology));
+    publish(std::make_shared<const std::string>(live::encode_topology(++topology_version, *session, &pieces)));
   }
 
   // After a cut: the new topology (and a frame) to the pages, timed.
