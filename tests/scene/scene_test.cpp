@@ -6,6 +6,7 @@
 #include <tetcut/error.hpp>
 #include <tetcut/io.hpp>
 #include <tetcut/scene.hpp>
+#include <tetcut/session.hpp>
 
 #include <cstdlib>
 #include <fstream>
@@ -168,6 +169,17 @@ TEST(Scene, EmbedsASurfaceFromAnArchive) {
   EXPECT_GT(scene.mesh.tets().size(), 0u);
   EXPECT_NE(load_error(R"({"embed": {"archive": "none.tar.gz", "surface": "a.off"}, )" + time + "}").find("cannot open the archive"),
             std::string::npos);
+  // A recording names the archive by its absolute path (the member stays a path inside it), so
+  // it replays from another directory.
+  Session session(scene);
+  session.advance();
+  testing::TempDir elsewhere;
+  write_recording(elsewhere / "take.json", scene, session);
+  const Scene replay = load_scene(elsewhere / "take.json");
+  ASSERT_TRUE(replay.embed_surface.has_value());
+  EXPECT_EQ(replay.embed_surface->num_triangles(), 8);
+  EXPECT_NE(recording_json(scene, session).find(std::filesystem::absolute(dir / "shapes.tar.gz").string()), std::string::npos);
+  EXPECT_NE(recording_json(scene, session).find("\"surface\": \"meshes/octa.off\""), std::string::npos);
 }
 
 TEST(Scene, SolverModesAndScalpelsAreRead) {
