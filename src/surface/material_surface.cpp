@@ -24,60 +24,65 @@ struct VertexKey {
   bool operator==(const VertexKey&) const = default;
 };
 
-std::uint64_t hash_key(const VertexKey& k) {
-  std::uint64_t h = static_cast<std::uint64_t>(k.point) * 0x9e3779b97f4a7c15ULL;
-  for (const Index n : k.nodes) h = (h ^ static_cast<std::uint32_t>(n)) * 0xbf58476d1ce4e5b9ULL;
-  return h ^ (h >> 31);
-}
-
-// Vertex ids by key, for numbering the surface's corners: open addressing with linear probing
-// in one array that is reused from call to call, so numbering allocates nothing once warm (a
-// node-based map cost a malloc per vertex, and most of the time of an update after a batch).
+// Vertex ids by key, for numbering the surface's corners. Keys are looked up by their point (an
+// index below the number of points): a head per point, stamped with the numbering it belongs to
+// so that starting a numbering clears nothing, and a chain through the point's vertices (one,
+// except where cuts have split the point between copies). O(1) per corner, and the table reads
+// only what the corners' points touch; allocates nothing once warm.
 class VertexIds {
  public:
-  // Empties the table, sized for up to `keys` distinct keys: never full. Callers pass the number
-  // of corners, several times the number of distinct vertices, so probes stay short.
-  void reset(std::size_t keys) {
-    std::size_t capacity = 16;
-    while (capacity <= keys) capacity *= 2;
-    if (slots_.size() != capacity) {
-      slots_.assign(capacity, Slot{});
-    } else {
-      std::fill(slots_.begin(), slots_.end(), Slot{});
+  // Starts a numbering of ids 0, 1, ... (each find_or_insert that inserts takes the next), over
+  // points 0 .. points - 1.
+  void reset(std::size_t points) {
+    if (head_.size() < points) {
+      head_.resize(points, -1);
+      stamp_.resize(points, 0);
     }
+    if (++generation_ == 0) {  // wrapped: every stamp may look current
+      std::fill(stamp_.begin(), stamp_.end(), 0);
+      generation_ = 1;
+    }
+    next_.clear();
+    nodes_.clear();
   }
-  // The id of `key`, given `next` (and *inserted set) when it is new.
-  Index find_or_insert(const VertexKey& key, Index next, bool* inserted) {
-    const std::size_t mask = slots_.size() - 1;
-    for (std::size_t i = static_cast<std::size_t>(hash_key(key)) & mask;; i = (i + 1) & mask) {
-      Slot& slot = slots_[i];
-      if (slot.id < 0) {
-        slot = {key, next};
-        *inserted = true;
-        return next;
-      }
-      if (slot.key == key) {
+  // The id of `key`; a new one (and *inserted set) when it is new.
+  Index find_or_insert(const VertexKey& key, bool* inserted) {
+    const auto p = static_cast<std::size_t>(key.point);
+    if (stamp_[p] != generation_) {
+      stamp_[p] = generation_;
+      head_[p] = -1;
+    }
+    for (Index v = head_[p]; v >= 0; v = next_[static_cast<std::size_t>(v)]) {
+      if (nodes_[static_cast<std::size_t>(v)] == key.nodes) {
         *inserted = false;
-        return slot.id;
+        return v;
       }
     }
+    const auto id = static_cast<Index>(next_.size());
+    next_.push_back(head_[p]);
+    nodes_.push_back(key.nodes);
+    head_[p] = id;
+    *inserted = true;
+    return id;
   }
 
  private:
-  struct Slot {
-    VertexKey key{};
-    Index id = -1;
-  };
-  std::vector<Slot> slots_;
+  std::vector<Index> head_;
+  std::vector<std::uint32_t> stamp_;
+  std::uint32_t generation_ = 0;
+  std::vector<Index> next_;                  // per id: the point's previous vertex
+  std::vector<std::array<Index, 4>> nodes_;  // per id: its key's nodes
 };
 
 // A polygon corner before it gets a vertex id: its key, the copy whose material the polygon
-// bounds (the vertex is embedded there when this corner is its first use), and which of that
-// copy's barycentric weights vanish exactly there (bit k: weight k).
+// bounds (the vertex is embedded there when this corner is its first use), which of that copy's
+// barycentric weights vanish exactly there (bit k: weight k), and the weights, computed when its
+// patch is built (so that assembling the surface after a cut only copies them).
 struct PatchCorner {
   VertexKey key;
   Index copy;
   std::uint8_t zero_mask;
+  std::array<double, 4> weights{};
 };
 
 // Computes keys of polygon corners; safe to run concurrently (side tests are, outside insertion).
@@ -153,6 +158,12 @@ Eigen::Vector4d barycentric(const TetMesh& mesh, Index tet, const Vec3& p, std::
     if ((zero_mask >> k) & 1u) weights[k] = 0;
   }
   return weights / weights.sum();
+}
+
+// The rest position of a surface point (mesh node n as n, intersection v as num_nodes + v).
+Vec3 point_position(const TetMesh& mesh, const registry::IntersectionRegistry& reg, std::int64_t point) {
+  return point < mesh.num_nodes() ? Vec3(mesh.rest().row(static_cast<Index>(point)).transpose())
+                                  : reg.position(static_cast<VertexId>(point - mesh.num_nodes()));
 }
 
 // Source of an uncovered facet on the material's boundary: the mesh face it lies on.
@@ -415,6 +426,10 @@ MaterialSurface SurfacePatches::assemble(const CellComplex& complex, const conne
         built[i].corners.clear();
         built[i].triangles.clear();
         build_patch(complex, copies, keys, rebuilt[first + i], &built[i]);
+        for (PatchCorner& corner : built[i].corners) {
+          const Eigen::Vector4d w = barycentric(mesh, copies.copy_tet()[corner.copy], point_position(mesh, reg, corner.key.point), corner.zero_mask);
+          corner.weights = {w[0], w[1], w[2], w[3]};
+        }
       }
     });
     for (std::size_t i = 0; i < count; ++i) {
@@ -468,7 +483,7 @@ MaterialSurface SurfacePatches::assemble(const CellComplex& complex, const conne
   result.triangle_source.resize(s.live_triangles);
   result.triangle_tet.resize(s.live_triangles);
   result.surface.triangles.resize(static_cast<Index>(s.live_triangles), 3);
-  s.ids.reset(s.live_corners);
+  s.ids.reset(static_cast<std::size_t>(mesh.num_nodes()) + static_cast<std::size_t>(reg.num_vertices()));
   std::vector<const PatchCorner*> vertices;
   std::vector<Index> ids;
   Index row = 0;
@@ -478,7 +493,7 @@ MaterialSurface SurfacePatches::assemble(const CellComplex& complex, const conne
     ids.resize(range.corners);
     for (std::uint32_t c = 0; c < range.corners; ++c) {
       bool inserted;
-      ids[c] = s.ids.find_or_insert(corners[c].key, static_cast<Index>(vertices.size()), &inserted);
+      ids[c] = s.ids.find_or_insert(corners[c].key, &inserted);
       if (inserted) vertices.push_back(&corners[c]);
     }
     const PatchTriangle* triangles = s.triangle_arena.data() + range.triangle_begin;
@@ -489,7 +504,7 @@ MaterialSurface SurfacePatches::assemble(const CellComplex& complex, const conne
     }
   }
 
-  // 3. Positions and embedding weights, in parallel.
+  // 3. Positions and embedding weights (those of each vertex's first corner), in parallel.
   const Index n = static_cast<Index>(vertices.size());
   result.surface.vertices.resize(n, 3);
   result.vertex_weights.resize(n, 4);
@@ -497,11 +512,8 @@ MaterialSurface SurfacePatches::assemble(const CellComplex& complex, const conne
   tbb::parallel_for(tbb::blocked_range<Index>(0, n, 1024), [&](const auto& range) {
     for (Index v = range.begin(); v != range.end(); ++v) {
       const PatchCorner& corner = *vertices[v];
-      const std::int64_t point = corner.key.point;
-      const Vec3 p = point < mesh.num_nodes() ? Vec3(mesh.rest().row(static_cast<Index>(point)).transpose())
-                                               : reg.position(static_cast<VertexId>(point - mesh.num_nodes()));
-      result.surface.vertices.row(v) = p.transpose();
-      result.vertex_weights.row(v) = barycentric(mesh, copies.copy_tet()[corner.copy], p, corner.zero_mask).transpose();
+      result.surface.vertices.row(v) = point_position(mesh, reg, corner.key.point).transpose();
+      for (int k = 0; k < 4; ++k) result.vertex_weights(v, k) = corner.weights[static_cast<std::size_t>(k)];
       result.vertex_tet[v] = corner.copy;
     }
   });
