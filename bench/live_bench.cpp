@@ -74,9 +74,9 @@ int main(int argc, char** argv) {
   // One tick: `events` (before the step), then the server's messages and the step.
   const auto tick = [&](Phase& phase, const auto& events) {
     const auto start = Clock::now();
-    const int cuts = session.cuts_applied();
+    const int changes = session.topology_changes();
     events();
-    if (session.cuts_applied() != cuts) {
+    if (session.topology_changes() != changes) {
       const auto t0 = Clock::now();
       session.surface();  // rebuilt after the cut
       phase.surface_ms.push_back(ms_since(t0));
@@ -88,7 +88,7 @@ int main(int argc, char** argv) {
     const auto s0 = Clock::now();
     const tetcut::SessionStep step = session.advance();
     phase.step_ms.push_back(ms_since(s0));
-    if (step.topology_changed && session.cuts_applied() == cuts) topology_bytes = topology().size();
+    if (step.topology_changed && session.topology_changes() == changes) topology_bytes = topology().size();
     frame_bytes = tetcut::live::encode_frame(version, static_cast<std::uint32_t>(session.steps()), session.time(),
                                              session.simulator().positions(), pieces)
                       .size();

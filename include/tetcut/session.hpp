@@ -81,7 +81,10 @@ class Session {
   Points surface_positions();
   /// The whole result: pieces, the mesh with its fields. Rebuilt after cuts when asked for.
   CutResult& result();
+  /// Cut batches applied (a scene's cuts, scalpel strips, blade strips), and those of them that
+  /// changed the mesh (a strip beside the object changes nothing).
   int cuts_applied() const;
+  int topology_changes() const;
   /// Springs across incisions now, the widest gap between the two ends of one, and the widest
   /// when they were attached (how far the incision had opened).
   Index num_incision_springs() const;

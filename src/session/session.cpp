@@ -153,6 +153,10 @@ struct Session::State {
   }
 
   void after_batch(const CutBatchReport& batch) {
+    ++cuts_applied;
+    // A batch that missed the material (a blade pose beside the object) changed no tet, so no
+    // copy, node or surface patch: nothing to remesh, and the pages' topology still holds.
+    if (batch.tets_touched == 0) return;
     const auto start = Clock::now();
     sim.remesh(cutter, batch);
     pinned.resize(static_cast<std::size_t>(sim.num_nodes()), 0);
@@ -163,7 +167,7 @@ struct Session::State {
     surface_current = false;
     constraints_stale = true;
     topology_changed = true;
-    ++cuts_applied;
+    ++topology_changes;
     pending.remesh += seconds_since(start);
   }
 
@@ -331,7 +335,7 @@ struct Session::State {
   std::vector<SessionEvent> recording;
   std::size_t next_cut = 0, next_transform = 0, next_springs = 0, next_event = 0;
   bool current_set = false, constraints_stale = false, topology_changed = false;
-  int steps = 0, cuts_applied = 0;
+  int steps = 0, cuts_applied = 0, topology_changes = 0;
   SceneStageSeconds pending;  // stages since the last step
 };
 
@@ -348,6 +352,7 @@ const Cutter& Session::cutter() const { return state_->cutter; }
 const MaterialSurface& Session::surface() { return state_->current_surface(); }
 CutResult& Session::result() { return state_->whole_result(); }
 int Session::cuts_applied() const { return state_->cuts_applied; }
+int Session::topology_changes() const { return state_->topology_changes; }
 Index Session::num_incision_springs() const { return static_cast<Index>(state_->spring_ends.size()); }
 double Session::widest_incision_spring() const { return state_->widest_spring(); }
 double Session::incision_gap_when_attached() const { return state_->gap_when_attached; }
