@@ -140,34 +140,62 @@ NodePieces node_pieces(const std::vector<std::array<Index, 4>>& copy_nodes, Inde
   return out;
 }
 
+TopologyLayout topology_layout(std::size_t copies, std::size_t nodes, std::size_t vertices, bool wide) {
+  const auto fits = [wide](std::size_t count) { return !wide && count <= std::size_t{1} << 16; };
+  TopologyLayout layout;
+  layout.flags = (fits(nodes) ? kNarrowNodes : 0u) | (fits(copies) ? kNarrowCopies : 0u) | (fits(vertices) ? kNarrowVertices : 0u);
+  const auto section = [](std::size_t bytes) { return (bytes + 3) / 4 * 4; };
+  const auto width = [&](std::uint32_t flag) -> std::size_t { return layout.flags & flag ? 2 : 4; };
+  layout.copy_nodes = 32;
+  layout.node_pieces = layout.copy_nodes + section(4 * copies * width(kNarrowNodes));
+  layout.vertex_copies = layout.node_pieces + section(nodes * width(kNarrowNodes));
+  layout.weights = layout.vertex_copies + section(vertices * width(kNarrowCopies));
+  layout.triangles = layout.weights + section(6 * vertices);
+  return layout;
+}
+
 std::string encode_topology(std::uint32_t version, const std::vector<std::array<Index, 4>>& copy_nodes,
-                            const NodePieces& pieces, const MaterialSurface& surface) {
+                            const NodePieces& pieces, const MaterialSurface& surface, bool wide) {
   const TriangleSurface& s = surface.surface;
-  const auto u32 = [](Index i) { return static_cast<std::uint32_t>(i); };
-  const Index num_nodes = static_cast<Index>(pieces.node_piece.size());
+  const auto u32 = [](std::size_t i) { return static_cast<std::uint32_t>(i); };
+  const std::size_t T = copy_nodes.size(), N = pieces.node_piece.size();
+  const auto V = static_cast<std::size_t>(s.num_vertices()), F = static_cast<std::size_t>(s.num_triangles());
+  const TopologyLayout layout = topology_layout(T, N, V, wide);
+  const std::size_t colours = layout.triangles + (F * 3 * (layout.flags & kNarrowVertices ? 2 : 4) + 3) / 4 * 4;
   std::string out;
-  out.reserve(32 + 16 * copy_nodes.size() + 4 * pieces.node_piece.size() + 24 * static_cast<std::size_t>(s.num_vertices()) +
-              12 * static_cast<std::size_t>(s.num_triangles()));
-  for (const std::uint32_t v : {kTopologyMessage, version, u32(static_cast<Index>(copy_nodes.size())), u32(num_nodes),
-                                u32(s.num_vertices()), u32(s.num_triangles()), pieces.count, 0u}) {
-    put(out, v);
-  }
+  out.reserve(colours + 4 * pieces.count);
+  for (const std::uint32_t v : {kTopologyMessage, version, u32(T), u32(N), u32(V), u32(F), pieces.count, layout.flags}) put(out, v);
+  // An index in 16 bits where the layout says so, else 32.
+  const auto index = [&](std::uint32_t flag, std::size_t i) {
+    if (layout.flags & flag) {
+      put(out, static_cast<std::uint16_t>(i));
+    } else {
+      put(out, u32(i));
+    }
+  };
   for (const auto& copy : copy_nodes) {
-    for (const Index n : copy) put(out, u32(n));
-  }
-  for (const std::uint32_t p : pieces.node_piece) put(out, p);
-  for (Index v = 0; v < s.num_vertices(); ++v) put(out, u32(surface.vertex_tet[v]));
-  for (Index v = 0; v < s.num_vertices(); ++v) {
-    for (int k = 0; k < 4; ++k) put(out, static_cast<float>(surface.vertex_weights(v, k)));
-  }
-  for (Index t = 0; t < s.num_triangles(); ++t) {
-    for (int k = 0; k < 3; ++k) put(out, u32(s.triangles(t, k)));
-  }
-  for (Index v = 0; v < s.num_vertices(); ++v) {
-    const auto rgb = render::piece_colour(pieces.node_piece[copy_nodes[surface.vertex_tet[v]][0]]);
-    out.append(reinterpret_cast<const char*>(rgb.data()), 3);
+    for (const Index n : copy) index(kNarrowNodes, static_cast<std::size_t>(n));
   }
   pad4(out);
+  for (const std::uint32_t p : pieces.node_piece) index(kNarrowNodes, p);
+  pad4(out);
+  for (std::size_t v = 0; v < V; ++v) index(kNarrowCopies, static_cast<std::size_t>(surface.vertex_tet[v]));
+  pad4(out);
+  // Weights 0..2 in units of 1/65535 (the page takes the fourth as one less their sum): a
+  // vertex is placed within 1e-5 of its copy's size, and the weights take 6 bytes, not 16.
+  for (Index v = 0; v < static_cast<Index>(V); ++v) {
+    for (int k = 0; k < 3; ++k) put(out, static_cast<std::uint16_t>(std::lround(std::clamp(surface.vertex_weights(v, k), 0.0, 1.0) * 65535.0)));
+  }
+  pad4(out);
+  for (Index t = 0; t < static_cast<Index>(F); ++t) {
+    for (int k = 0; k < 3; ++k) index(kNarrowVertices, static_cast<std::size_t>(s.triangles(t, k)));
+  }
+  pad4(out);
+  for (std::uint32_t p = 0; p < pieces.count; ++p) {
+    const auto rgb = render::piece_colour(static_cast<Index>(p));
+    out.append(reinterpret_cast<const char*>(rgb.data()), 3);
+    out.push_back('\0');
+  }
   return out;
 }
 

@@ -121,6 +121,9 @@ struct LiveServer::Impl {
   live::NodePieces pieces;
   bool paused = false;
   std::optional<Clock::time_point> blade_received;  // the first blade pose since the last frame
+  // Blade poses since the last topology that changed the mesh: each page is told which topology
+  // shows its cut (the "cut" reply), so that it can time how soon the cut is seen.
+  std::vector<std::pair<std::weak_ptr<Page>, std::int64_t>> cut_causes;
 
   // Shared, under `mutex`.
   mutable std::mutex mutex;
@@ -260,13 +263,20 @@ struct LiveServer::Impl {
         batch.swap(commands);
       }
       const bool due = !paused && (!options.real_time || Clock::now() >= next);
-      const int cuts_before = session->cuts_applied();
+      const int changes_before = session->topology_changes();
       const std::uint32_t version_before = topology_version;
       for (auto& command : batch) command();
-      bool topology = session->cuts_applied() != cuts_before && topology_version == version_before;
+      bool topology = session->topology_changes() != changes_before && topology_version == version_before;
       const bool changed = !batch.empty();
-      // A cut goes out before the step: it is seen a step sooner.
-      if (topology) publish_cut();
+      // A cut goes out before the step: it is seen a step sooner. Its "cut" replies go first, so
+      // that a page knows the topology's cause when the topology comes.
+      if (topology) {
+        for (const auto& [page, seq] : cut_causes) {
+          reply(page, Json{{"type", "cut"}, {"seq", seq}, {"version", topology_version + 1}}.dump());
+        }
+        publish_cut();
+      }
+      cut_causes.clear();
       if (due) {
         try {
           const SessionStep step = session->advance();
@@ -498,9 +508,13 @@ void LiveServer::Impl::command(const std::weak_ptr<Page>& page, live::ClientComm
         if (command.seq) answer["seq"] = *command.seq;
         reply(page, answer.dump());
       } else {
+        const int changes_before = session->topology_changes();
         session->apply(e);
+        if (session->topology_changes() != changes_before) {
+          if (!blade_received) blade_received = received;
+          if (command.seq) cut_causes.emplace_back(page, *command.seq);
+        }
       }
-      if (e.kind == SessionEvent::Kind::kBlade && !blade_received) blade_received = received;
     } catch (const Error& e) {
       log(std::string("refused an event: ") + e.what());
       reply(page, live::error_message(e.what(), command.seq));

@@ -4,6 +4,7 @@
 #include <tetcut/cutter.hpp>
 #include <tetcut/error.hpp>
 #include <tetcut/generators.hpp>
+#include <tetcut/render.hpp>
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -119,35 +120,110 @@ TEST(LiveProtocol, FramesQuantiseEachPieceInItsOwnBox) {
   EXPECT_LT(read_at<float>(frame, 32 + 24 + 12), 1e-7);
 }
 
+// A topology message read back as the page reads it: by its header's counts and flags.
+struct DecodedTopology {
+  std::uint32_t version = 0, flags = 0, pieces = 0;
+  std::vector<std::array<std::uint32_t, 4>> copy_nodes;
+  std::vector<std::uint32_t> node_piece, vertex_copy;
+  std::vector<std::array<double, 4>> weights;
+  std::vector<std::array<std::uint32_t, 3>> triangles;
+  std::vector<std::array<std::uint8_t, 3>> colours;
+};
+
+DecodedTopology decode_topology(const std::string& m) {
+  DecodedTopology d;
+  EXPECT_EQ(read_at<std::uint32_t>(m, 0), kTopologyMessage);
+  d.version = read_at<std::uint32_t>(m, 4);
+  const std::size_t T = read_at<std::uint32_t>(m, 8), N = read_at<std::uint32_t>(m, 12), V = read_at<std::uint32_t>(m, 16),
+                    F = read_at<std::uint32_t>(m, 20);
+  d.pieces = read_at<std::uint32_t>(m, 24);
+  d.flags = read_at<std::uint32_t>(m, 28);
+  std::size_t at = 32;
+  const auto align = [&] { at = (at + 3) / 4 * 4; };
+  const auto index = [&](std::uint32_t flag) -> std::uint32_t {
+    const std::uint32_t i = d.flags & flag ? read_at<std::uint16_t>(m, at) : read_at<std::uint32_t>(m, at);
+    at += d.flags & flag ? 2 : 4;
+    return i;
+  };
+  d.copy_nodes.resize(T);
+  for (auto& copy : d.copy_nodes) {
+    for (auto& n : copy) n = index(kNarrowNodes);
+  }
+  align();
+  for (std::size_t n = 0; n < N; ++n) d.node_piece.push_back(index(kNarrowNodes));
+  align();
+  for (std::size_t v = 0; v < V; ++v) d.vertex_copy.push_back(index(kNarrowCopies));
+  align();
+  for (std::size_t v = 0; v < V; ++v) {
+    std::array<double, 4> w{};
+    for (int k = 0; k < 3; ++k, at += 2) w[static_cast<std::size_t>(k)] = read_at<std::uint16_t>(m, at) / 65535.0;
+    w[3] = 1 - w[0] - w[1] - w[2];
+    d.weights.push_back(w);
+  }
+  align();
+  d.triangles.resize(F);
+  for (auto& t : d.triangles) {
+    for (auto& v : t) v = index(kNarrowVertices);
+  }
+  align();
+  for (std::uint32_t p = 0; p < d.pieces; ++p, at += 4) {
+    d.colours.push_back({read_at<std::uint8_t>(m, at), read_at<std::uint8_t>(m, at + 1), read_at<std::uint8_t>(m, at + 2)});
+    EXPECT_EQ(read_at<std::uint8_t>(m, at + 3), 0);
+  }
+  EXPECT_EQ(at, m.size());  // nothing left over, nothing missing
+  return d;
+}
+
 TEST(LiveProtocol, TopologyHoldsTheSurfaceEmbeddedInItsCopies) {
-  Cutter cutter(make_grid(Box{}, {2, 2, 2}, 5));
+  // A block cut in two by a plane at x = 0.4: two pieces, each with its colour.
+  Cutter cutter(make_grid(Box{}, {3, 3, 3}, 5));
+  TriangleSurface plane;
+  plane.vertices.resize(4, 3);
+  plane.vertices << 0.4, -1, -1, 0.4, 2, -1, 0.4, 2, 2, 0.4, -1, 2;
+  plane.triangles.resize(2, 3);
+  plane.triangles << 0, 1, 2, 0, 2, 3;
+  cutter.cut(plane);
   const MaterialSurface surface = cutter.surface();
   const NodePieces pieces = node_pieces(cutter.tet_nodes(), cutter.num_nodes());
-  const std::string topology = encode_topology(5, cutter.tet_nodes(), pieces, surface);
-  const auto T = cutter.tet_nodes().size(), N = static_cast<std::size_t>(cutter.num_nodes());
-  const auto V = static_cast<std::size_t>(surface.surface.num_vertices()), F = static_cast<std::size_t>(surface.surface.num_triangles());
-  EXPECT_EQ(read_at<std::uint32_t>(topology, 0), kTopologyMessage);
-  EXPECT_EQ(read_at<std::uint32_t>(topology, 4), 5u);
-  EXPECT_EQ(read_at<std::uint32_t>(topology, 8), T);
-  EXPECT_EQ(read_at<std::uint32_t>(topology, 12), N);
-  EXPECT_EQ(read_at<std::uint32_t>(topology, 16), V);
-  EXPECT_EQ(read_at<std::uint32_t>(topology, 20), F);
-  EXPECT_EQ(read_at<std::uint32_t>(topology, 24), 1u);
-  const std::size_t expected = 32 + 16 * T + 4 * N + 4 * V + 16 * V + 12 * F + 3 * V;
-  EXPECT_EQ(topology.size(), (expected + 3) / 4 * 4);
-  // The page's placement of vertex v (weights times its copy's corners) is its rest position.
-  const std::size_t copy_at = 32 + 16 * T + 4 * N, weights_at = copy_at + 4 * V, triangles_at = weights_at + 16 * V;
+  ASSERT_EQ(pieces.count, 2u);
   const Points& rest = cutter.input().rest();
-  for (std::size_t v = 0; v < V; v += 7) {
-    const auto copy = read_at<std::uint32_t>(topology, copy_at + 4 * v);
-    Vec3 placed = Vec3::Zero();
-    for (int k = 0; k < 4; ++k) {
-      const auto node = read_at<std::uint32_t>(topology, 32 + 16 * copy + 4 * k);
-      placed += read_at<float>(topology, weights_at + 16 * v + 4 * k) * rest.row(cutter.node_parent()[node]).transpose();
+  for (const bool wide : {false, true}) {
+    SCOPED_TRACE(wide ? "32-bit indices" : "16-bit indices");
+    const std::string topology = encode_topology(5, cutter.tet_nodes(), pieces, surface, wide);
+    const DecodedTopology d = decode_topology(topology);
+    EXPECT_EQ(d.version, 5u);
+    EXPECT_EQ(d.flags, wide ? 0u : kNarrowNodes | kNarrowCopies | kNarrowVertices);
+    const TopologyLayout layout = topology_layout(cutter.tet_nodes().size(), pieces.node_piece.size(),
+                                                  static_cast<std::size_t>(surface.surface.num_vertices()), wide);
+    EXPECT_EQ(layout.flags, d.flags);
+    EXPECT_EQ(read_at<std::uint32_t>(topology, layout.triangles) & (wide ? 0xffffffffu : 0xffffu),
+              static_cast<std::uint32_t>(surface.surface.triangles(0, 0)));
+    ASSERT_EQ(d.copy_nodes.size(), cutter.tet_nodes().size());
+    for (std::size_t t = 0; t < d.copy_nodes.size(); ++t) {
+      for (int k = 0; k < 4; ++k) EXPECT_EQ(d.copy_nodes[t][static_cast<std::size_t>(k)], static_cast<std::uint32_t>(cutter.tet_nodes()[t][static_cast<std::size_t>(k)]));
     }
-    EXPECT_LT((placed - surface.surface.vertices.row(static_cast<Index>(v)).transpose()).norm(), 1e-6) << v;
+    EXPECT_EQ(d.node_piece, pieces.node_piece);
+    ASSERT_EQ(d.triangles.size(), static_cast<std::size_t>(surface.surface.num_triangles()));
+    for (std::size_t t = 0; t < d.triangles.size(); ++t) {
+      for (int k = 0; k < 3; ++k) EXPECT_EQ(d.triangles[t][static_cast<std::size_t>(k)], static_cast<std::uint32_t>(surface.surface.triangles(static_cast<Index>(t), k)));
+    }
+    for (std::uint32_t p = 0; p < d.pieces; ++p) EXPECT_EQ(d.colours[p], render::piece_colour(static_cast<Index>(p)));
+    // The page's placement of every vertex (weights times its copy's corners) is its rest
+    // position, to the weights' quantisation (a copy here is 1/3 across).
+    ASSERT_EQ(d.vertex_copy.size(), static_cast<std::size_t>(surface.surface.num_vertices()));
+    for (std::size_t v = 0; v < d.vertex_copy.size(); ++v) {
+      EXPECT_EQ(d.vertex_copy[v], static_cast<std::uint32_t>(surface.vertex_tet[v]));
+      Vec3 placed = Vec3::Zero();
+      for (int k = 0; k < 4; ++k) {
+        const auto node = d.copy_nodes[d.vertex_copy[v]][static_cast<std::size_t>(k)];
+        placed += d.weights[v][static_cast<std::size_t>(k)] * rest.row(cutter.node_parent()[node]).transpose();
+      }
+      EXPECT_LT((placed - surface.surface.vertices.row(static_cast<Index>(v)).transpose()).norm(), 2e-5) << v;
+    }
   }
-  EXPECT_EQ(read_at<std::uint32_t>(topology, triangles_at), static_cast<std::uint32_t>(surface.surface.triangles(0, 0)));
+  // 16-bit indices where the counts fit, whatever the others.
+  EXPECT_EQ(topology_layout(10, 65536, 65537).flags, kNarrowNodes | kNarrowCopies);
+  EXPECT_EQ(topology_layout(70000, 10, 10).flags, kNarrowNodes | kNarrowVertices);
 }
 
 }  // namespace

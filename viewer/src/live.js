@@ -14,13 +14,15 @@ import { createView, errorReporter, frameBox, linearOf, softwareRenderer, surfac
 const api = {
   ready: false, connected: false, framesReceived: 0, topologies: 0, version: 0, pieces: 0,
   stats: null, errors: [], fps: 0, tool: 'scalpel', error: null,
-  // Milliseconds from a blade pose that cuts (not a stroke's first) leaving the page to the new
-  // topology arriving: how soon a cut is seen.
+  // Milliseconds from a blade pose that cut the material leaving the page to the first frame
+  // that shows the cut (the server's "cut" reply names the topology that holds it): how soon a
+  // cut is seen.
   cutLatencies: [],
   // Milliseconds the page spent reading each topology message, and drawing each frame.
   topologyMs: [], drawMs: [],
 };
-let bladeSentAt = null;  // the first cutting blade pose since the last topology
+const bladeSentAt = new Map();  // blade poses' seq -> when they left, until answered or stale
+const cutSentAt = new Map();    // topology version -> when the first pose it shows left
 window.tetcutLive = api;
 const showError = errorReporter(api, 'tetcut live');
 
@@ -66,38 +68,48 @@ function fail(message) {
 // --- messages --------------------------------------------------------------------------------
 function readTopology(buffer) {
   const header = new Uint32Array(buffer, 0, 8);
-  const [, version, copies, nodeCount, vertices, triangles, pieces] = header;
+  const [, version, copies, nodeCount, vertices, triangles, pieces, flags] = header;
   let offset = 32;
   const take = (Type, count) => {
     if (offset + count * Type.BYTES_PER_ELEMENT > buffer.byteLength) fail('a topology message is shorter than its counts');
     const array = new Type(buffer, offset, count);
-    offset += count * Type.BYTES_PER_ELEMENT;
+    offset += Math.ceil((count * Type.BYTES_PER_ELEMENT) / 4) * 4;  // sections are 4-byte aligned
     return array;
   };
+  // 16-bit indices where the flags say the count fits (see live_protocol.hpp).
+  const narrow = (flag) => (flags & flag ? Uint16Array : Uint32Array);
+  const nodeIndex = narrow(1), copyIndex = narrow(2), vertexIndex = narrow(4);
   const t = {
     version, pieces, nodeCount, vertices,
-    copyNodes: take(Uint32Array, 4 * copies),
-    nodePiece: take(Uint32Array, nodeCount),
-    vertexCopy: take(Uint32Array, vertices),
-    weights: take(Float32Array, 4 * vertices),
-    triangles: take(Uint32Array, 3 * triangles),
-    colours: take(Uint8Array, 3 * vertices),
+    copyNodes: take(nodeIndex, 4 * copies),
+    nodePiece: take(nodeIndex, nodeCount),
+    vertexCopy: take(copyIndex, vertices),
+    quantisedWeights: take(Uint16Array, 3 * vertices),
+    triangles: take(vertexIndex, 3 * triangles),
+    pieceColours: take(Uint8Array, 4 * pieces),
   };
-  // Each vertex's four nodes, once, so that a frame costs 12 multiply-adds a vertex.
+  // Each vertex's four nodes and weights, once, so that a frame costs 12 multiply-adds a vertex.
   t.corners = new Uint32Array(4 * vertices);
+  t.weights = new Float32Array(4 * vertices);
+  const colours = new Float32Array(3 * vertices);
   for (let v = 0; v < vertices; ++v) {
     const copy = t.vertexCopy[v];
     if (copy >= copies) fail(`vertex ${v} names tet copy ${copy} of ${copies}`);
+    let rest = 1;
     for (let k = 0; k < 4; ++k) {
       const node = t.copyNodes[4 * copy + k];
       if (node >= nodeCount) fail(`a tet copy names node ${node} of ${nodeCount}`);
       t.corners[4 * v + k] = node;
+      const w = k < 3 ? t.quantisedWeights[3 * v + k] / 65535 : rest;
+      t.weights[4 * v + k] = w;
+      rest -= w;
     }
+    const piece = t.nodePiece[t.corners[4 * v]];
+    if (piece >= pieces) fail(`a node is in piece ${piece} of ${pieces}`);
+    for (let c = 0; c < 3; ++c) colours[3 * v + c] = linearOf[t.pieceColours[4 * piece + c]];
   }
   const tri = t.triangles;
   for (let i = 0; i < tri.length; ++i) if (tri[i] >= vertices) fail(`a triangle names vertex ${tri[i]} of ${vertices}`);
-  const colours = new Float32Array(3 * vertices);
-  for (let i = 0; i < colours.length; ++i) colours[i] = linearOf[t.colours[i]];
 
   t.geometry = new THREE.BufferGeometry();
   t.geometry.setAttribute('position', new THREE.BufferAttribute(new Float32Array(3 * vertices), 3));
@@ -106,8 +118,6 @@ function readTopology(buffer) {
   // Shown from the first frame of it on; until then the old surface stays (no blank frame).
   pending = t;
   api.topologies += 1;
-  if (bladeSentAt !== null) api.cutLatencies.push(performance.now() - bladeSentAt);
-  bladeSentAt = null;
   api.version = version;
   api.pieces = pieces;
 }
@@ -119,6 +129,12 @@ function readFrame(buffer) {
     surface.geometry = pending.geometry;
     topology = pending;
     pending = null;
+    // Seen: the cuts this topology shows (and any an older one showed, dropped unseen).
+    for (const [v, sentAt] of cutSentAt) {
+      if (v > topology.version) continue;
+      api.cutLatencies.push(performance.now() - sentAt);
+      cutSentAt.delete(v);
+    }
   }
   if (!topology || version !== topology.version) return;  // a frame of a topology not seen yet
   if (nodeCount !== topology.nodeCount) fail('a frame has a different number of nodes than its topology');
@@ -172,6 +188,11 @@ function readText(text) {
   } else if (message.type === 'error') {
     api.errors.push(message.message);
     ui.message.textContent = message.message;
+  } else if (message.type === 'cut') {
+    // Which topology shows the cut of a blade pose (it comes before that topology).
+    const sentAt = bladeSentAt.get(message.seq);
+    if (sentAt !== undefined) cutSentAt.set(message.version, Math.min(sentAt, cutSentAt.get(message.version) ?? Infinity));
+    for (const s of bladeSentAt.keys()) if (s <= message.seq) bladeSentAt.delete(s);
   } else if (message.type === 'grabbed') {
     hookGrabbed(message);
   } else if (message.type === 'reset') {
@@ -296,9 +317,13 @@ function flushBlade() {
   clearTimeout(bladeTimer);
   bladeTimer = null;
   if (!bladeWaiting) return;
-  const cuts = bladeWaiting.cuts;
   delete bladeWaiting.cuts;
-  if (send(bladeWaiting) > 0 && cuts) bladeSentAt ??= performance.now();
+  const sent = send(bladeWaiting);
+  if (sent > 0) {
+    bladeSentAt.set(sent, performance.now());
+    // Poses beside the object are never answered: forget the oldest.
+    if (bladeSentAt.size > 256) bladeSentAt.delete(bladeSentAt.keys().next().value);
+  }
   bladeWaiting = null;
   bladeLastSent = performance.now();
 }
