@@ -31,6 +31,24 @@ Scene hanging_block(const std::filesystem::path& dir) {
 // A blade across the block at height z, along y from -0.1 to `depth`, at x.
 BladePose blade_at(double x, double depth, double z = 0.53) { return {Vec3(x, -0.1, z), Vec3(x, depth, z)}; }
 
+TEST(Session, AStrokeBesideTheObjectChangesNothing) {
+  testing::TempDir dir;
+  Session session(hanging_block(dir.path()));
+  session.advance();
+  const Index tets = session.simulator().num_tets();
+  session.blade(blade_at(-0.6, 1.1));
+  session.blade(blade_at(-0.3, 1.1));  // a strip cut, wholly outside the block
+  EXPECT_EQ(session.cuts_applied(), 1);
+  EXPECT_EQ(session.topology_changes(), 0);
+  EXPECT_FALSE(session.advance().topology_changed);
+  EXPECT_EQ(session.simulator().num_tets(), tets);
+  // Into the block: the mesh changes.
+  session.blade(blade_at(0.3, 1.1));
+  EXPECT_EQ(session.cuts_applied(), 2);
+  EXPECT_EQ(session.topology_changes(), 1);
+  EXPECT_TRUE(session.advance().topology_changed);
+}
+
 TEST(Session, StrokesCutWhereTheBladeGoesInTheMaterial) {
   testing::TempDir dir;
   const Scene scene = hanging_block(dir.path());
