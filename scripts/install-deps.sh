@@ -14,6 +14,9 @@ packages=(
   # Independent tools the tests cross-check against: TetGen writes meshes we must read, meshio
   # (Debian's Python 3) reads what we write.
   tetgen python3-meshio python3-numpy
+  # The Python module (import tetcut): pybind11 and Python's headers to build it, pytest to test
+  # it, venv (with pip) to install it as users do.
+  pybind11-dev python3-dev python3-pytest python3-venv
   # Offscreen rendering (tetcut render): EGL and OpenGL ES 3 headers, Mesa's EGL and software
   # rasteriser (no GPU needed), libpng.
   libegl-dev libgles-dev libegl-mesa0 libgl1-mesa-dri libpng-dev
