@@ -1,0 +1,51 @@
+#pragma once
+// Whether the material surface passes through itself: exact triangle-triangle tests between parts
+// of the surface of different tet copies (what `tetcut sim --check-intersections` reports per
+// frame). A measure, not a response: contact between pieces is not simulated yet.
+
+#include <tetcut/cutter.hpp>
+
+#include <array>
+#include <span>
+
+namespace tetcut {
+
+/// Whether the closed triangles (a0, a1, a2) and (b0, b1, b2) share a point, decided exactly
+/// (orient3d and orient2d with exact fallbacks): touching at a point or along an edge counts,
+/// coplanar overlap counts. Both must be non-degenerate (corners not collinear).
+bool triangles_intersect(const std::array<Vec3, 3>& a, const std::array<Vec3, 3>& b);
+
+struct SurfaceIntersections {
+  Index intersecting_pairs = 0;  ///< pairs of triangles of different copies that intersect
+  Index candidate_pairs = 0;     ///< pairs of different copies whose boxes meet (tested, or excluded)
+  Index degenerate_triangles = 0;  ///< triangles with collinear corners where they are now: not tested
+  /// Up to 16 intersecting pairs (triangle ids, the smaller first), in increasing order.
+  std::vector<std::array<Index, 2>> examples;
+};
+
+/// Counts the pairs of material-surface triangles bounding different tet copies that intersect
+/// with the surface's vertices at `positions` (|V| x 3, e.g. Session::surface_positions());
+/// `copy_nodes` are the cut mesh's copies (Cutter::tet_nodes). Excluded, as touching by
+/// construction rather than colliding:
+/// - pairs of copies that share a node: neighbours in the material (a node is shared only through
+///   material, so they are in one piece, within a tet of each other). Their surfaces meet by
+///   construction, and where the tets' faces miss each other by rounding (a cut along 0.5
+///   through a lattice at thirds) the surface has folds of 1e-16 that deformed positions,
+///   rounded, show as crossings. So crossings between parts of one piece less than about a tet
+///   apart in the material are not seen; lips of an incision are, except within a tet of its end;
+/// - pairs that share a point across a cut not yet opened there: two vertices with the same rest
+///   position (exactly) that are still within `opened` of each other now (at least the rounding
+///   of placing a vertex by its copy's weights, 64 ulps of the largest coordinate; a simulation
+///   passes its solver's noise, since the two sides of a cut, free to drift, wander around each
+///   other by about its tolerance before anything opens them); and pairs on the two
+///   sides of one cut triangle whose six corners are all such unopened points (the two sides'
+///   triangulations of a polygon overlap without always sharing a corner). So the two sides of
+///   a fresh cut, which coincide, are not counted, and are as soon as they have moved apart and
+///   cross.
+/// Broad phase: a box hierarchy over the triangles; O(F log F + candidates), parallel. Throws
+/// Error(kInvalidArgument) when `positions` has the wrong size or a triangle names a copy that
+/// `copy_nodes` lacks.
+SurfaceIntersections count_surface_intersections(const MaterialSurface& surface, std::span<const std::array<Index, 4>> copy_nodes,
+                                                 const Points& positions, double opened = 0);
+
+}  // namespace tetcut

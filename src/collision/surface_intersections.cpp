@@ -1,0 +1,161 @@
+// Counting where the material surface passes through itself (see collision.hpp): boxes of the
+// triangles at their current positions in a hierarchy, each triangle's candidates found in
+// parallel, and each candidate pair of different copies decided by the exact test.
+
+#include <tetcut/collision.hpp>
+#include <tetcut/error.hpp>
+
+#include <tbb/blocked_range.h>
+#include <tbb/combinable.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cstring>
+#include <limits>
+#include <unordered_map>
+
+#include "geometry/predicates.hpp"
+#include "spatial/box_tree.hpp"
+#include "util/union_find.hpp"
+
+namespace tetcut {
+namespace {
+
+// Per vertex: an id shared by the vertices that are one point across a cut not yet opened there:
+// the same rest position, bit for bit, and the same position now up to the rounding of placing a
+// vertex by its copy's weights (two copies place one point with different nodes and weights, so
+// their sums differ in the last bits even while the nodes coincide): `tolerance`. O(V) expected.
+std::vector<Index> welded_ids(const Points& rest, const Points& now, double tolerance) {
+  struct Key {
+    std::array<double, 3> x;
+    bool operator==(const Key& o) const { return std::memcmp(x.data(), o.x.data(), sizeof x) == 0; }
+  };
+  struct Hash {
+    std::size_t operator()(const Key& k) const {
+      std::uint64_t h = 0x9e3779b97f4a7c15ULL;
+      for (const double d : k.x) {
+        std::uint64_t bits;
+        std::memcpy(&bits, &d, sizeof bits);
+        h = (h ^ bits) * 0xbf58476d1ce4e5b9ULL;
+      }
+      return static_cast<std::size_t>(h ^ (h >> 31));
+    }
+  };
+  // Vertices by rest position: a chain through each position's vertices (one, or a few at cuts).
+  std::unordered_map<Key, Index, Hash> first;
+  first.reserve(static_cast<std::size_t>(rest.rows()));
+  std::vector<Index> next(static_cast<std::size_t>(rest.rows()), -1);
+  UnionFind same(static_cast<std::size_t>(rest.rows()));
+  for (Index v = 0; v < rest.rows(); ++v) {
+    // +0.0 turns -0.0 into 0.0, so that equal coordinates are equal keys.
+    const Key key{{rest(v, 0) + 0.0, rest(v, 1) + 0.0, rest(v, 2) + 0.0}};
+    const auto [it, inserted] = first.try_emplace(key, v);
+    if (inserted) continue;
+    for (Index u = it->second; u >= 0; u = next[static_cast<std::size_t>(u)]) {
+      if ((now.row(u) - now.row(v)).cwiseAbs().maxCoeff() <= tolerance) same.join(u, v);
+    }
+    next[static_cast<std::size_t>(v)] = it->second;
+    it->second = v;
+  }
+  std::vector<Index> out(static_cast<std::size_t>(rest.rows()));
+  for (Index v = 0; v < rest.rows(); ++v) out[static_cast<std::size_t>(v)] = same.find(v);
+  return out;
+}
+
+}  // namespace
+
+SurfaceIntersections count_surface_intersections(const MaterialSurface& surface, std::span<const std::array<Index, 4>> copy_nodes,
+                                                 const Points& positions, double opened) {
+  const TriangleSurface& s = surface.surface;
+  if (positions.rows() != s.num_vertices()) {
+    throw Error(ErrorKind::kInvalidArgument, "surface positions: " + std::to_string(positions.rows()) + " rows for " +
+                                                 std::to_string(s.num_vertices()) + " surface vertices");
+  }
+  const Index F = s.num_triangles();
+  for (const Index copy : surface.triangle_tet) {
+    if (copy < 0 || static_cast<std::size_t>(copy) >= copy_nodes.size()) {
+      throw Error(ErrorKind::kInvalidArgument, "the surface names tet copy " + std::to_string(copy) + " of " + std::to_string(copy_nodes.size()));
+    }
+  }
+  const auto neighbours = [&](Index a, Index b) {
+    const auto& p = copy_nodes[static_cast<std::size_t>(surface.triangle_tet[static_cast<std::size_t>(a)])];
+    const auto& q = copy_nodes[static_cast<std::size_t>(surface.triangle_tet[static_cast<std::size_t>(b)])];
+    for (const Index n : p) {
+      if (std::find(q.begin(), q.end(), n) != q.end()) return true;
+    }
+    return false;
+  };
+  // Placing a vertex is 4 products and 3 sums of node coordinates: its rounding is a few ulps
+  // of the largest coordinate; 64 of them is far below any motion that could open a cut.
+  const double scale = positions.size() > 0 ? positions.cwiseAbs().maxCoeff() : 0.0;
+  const std::vector<Index> weld = welded_ids(s.vertices, positions, std::max(opened, 64 * std::numeric_limits<double>::epsilon() * scale));
+  // Per vertex: still one point with another (unopened).
+  std::vector<std::uint8_t> unopened(weld.size(), 0);
+  for (std::size_t v = 0; v < weld.size(); ++v) {
+    if (weld[v] != static_cast<Index>(v)) unopened[v] = unopened[static_cast<std::size_t>(weld[v])] = 1;
+  }
+  // The two sides of one cut triangle where it has not opened: their triangulations of the same
+  // polygon overlap, and need not share a corner.
+  const auto closed_cut = [&](Index a, Index b) {
+    const std::int64_t source = surface.triangle_source[static_cast<std::size_t>(a)];
+    if (source < 0 || source != surface.triangle_source[static_cast<std::size_t>(b)]) return false;
+    for (int k = 0; k < 3; ++k) {
+      if (!unopened[static_cast<std::size_t>(s.triangles(a, k))] || !unopened[static_cast<std::size_t>(s.triangles(b, k))]) return false;
+    }
+    return true;
+  };
+  std::vector<spatial::Aabb> boxes(static_cast<std::size_t>(F));
+  std::vector<std::uint8_t> degenerate(static_cast<std::size_t>(F), 0);
+  const auto corners = [&](Index t) {
+    return std::array<Vec3, 3>{positions.row(s.triangles(t, 0)).transpose(), positions.row(s.triangles(t, 1)).transpose(),
+                               positions.row(s.triangles(t, 2)).transpose()};
+  };
+  tbb::parallel_for(tbb::blocked_range<Index>(0, F, 1024), [&](const auto& range) {
+    for (Index t = range.begin(); t != range.end(); ++t) {
+      const auto c = corners(t);
+      for (const Vec3& p : c) boxes[static_cast<std::size_t>(t)].extend(p);
+      degenerate[static_cast<std::size_t>(t)] = geometry::collinear(c[0], c[1], c[2]) ? 1 : 0;
+    }
+  });
+  const spatial::BoxTree tree(boxes);
+
+  struct Counts {
+    Index intersecting = 0, candidates = 0;
+    std::vector<std::array<Index, 2>> examples;
+    std::vector<Index> found;
+  };
+  tbb::combinable<Counts> counts;
+  tbb::parallel_for(tbb::blocked_range<Index>(0, F, 256), [&](const auto& range) {
+    Counts& mine = counts.local();
+    for (Index a = range.begin(); a != range.end(); ++a) {
+      if (degenerate[static_cast<std::size_t>(a)]) continue;
+      mine.found.clear();
+      tree.query(boxes[static_cast<std::size_t>(a)], &mine.found);
+      const auto ca = corners(a);
+      for (const Index b : mine.found) {
+        if (b <= a || degenerate[static_cast<std::size_t>(b)]) continue;
+        if (surface.triangle_tet[static_cast<std::size_t>(a)] == surface.triangle_tet[static_cast<std::size_t>(b)]) continue;
+        ++mine.candidates;
+        bool shared = neighbours(a, b) || closed_cut(a, b);
+        for (int i = 0; i < 3 && !shared; ++i) {
+          for (int j = 0; j < 3 && !shared; ++j) shared = weld[static_cast<std::size_t>(s.triangles(a, i))] == weld[static_cast<std::size_t>(s.triangles(b, j))];
+        }
+        if (shared || !triangles_intersect(ca, corners(b))) continue;
+        ++mine.intersecting;
+        mine.examples.push_back({a, b});
+      }
+    }
+  });
+  SurfaceIntersections out;
+  for (const std::uint8_t d : degenerate) out.degenerate_triangles += d;
+  counts.combine_each([&](const Counts& c) {
+    out.intersecting_pairs += c.intersecting;
+    out.candidate_pairs += c.candidates;
+    out.examples.insert(out.examples.end(), c.examples.begin(), c.examples.end());
+  });
+  std::sort(out.examples.begin(), out.examples.end());
+  if (out.examples.size() > 16) out.examples.resize(16);
+  return out;
+}
+
+}  // namespace tetcut

@@ -1,0 +1,124 @@
+// Counting self-intersections of the material surface: a block cut in two, its halves pushed
+// into each other, pulled apart, and moved by less than any epsilon.
+
+#include <tetcut/collision.hpp>
+#include <tetcut/error.hpp>
+#include <tetcut/figures.hpp>
+#include <tetcut/generators.hpp>
+
+#include <gtest/gtest.h>
+
+namespace tetcut {
+namespace {
+
+struct CutBlock {
+  CutResult result;
+  std::vector<std::array<Index, 4>> copies;
+  std::vector<std::uint8_t> right_node;  // nodes of the piece at x > 0.5
+};
+
+CutBlock halves() {
+  Cutter cutter(make_grid(Box{}, {3, 3, 3}, 5));
+  cutter.cut(figures::axis_square(0, 0.5, -1, 2));
+  CutBlock b{cutter.result(), cutter.tet_nodes(), {}};
+  const CutMesh& m = b.result.mesh;
+  EXPECT_EQ(m.num_pieces(), 2);
+  b.right_node.assign(static_cast<std::size_t>(m.mesh.num_nodes()), 0);
+  // The right piece: the one holding the corner (1, 1, 1); pieces share no node.
+  Index corner = 0;
+  for (Index n = 0; n < m.mesh.num_nodes(); ++n) {
+    if (m.mesh.rest().row(n) == Eigen::RowVector3d(1, 1, 1)) corner = n;
+  }
+  Index right = -1;
+  for (Index t = 0; t < m.mesh.num_tets(); ++t) {
+    for (int k = 0; k < 4; ++k) right = m.mesh.tets()(t, k) == corner ? m.tet_piece[static_cast<std::size_t>(t)] : right;
+  }
+  for (Index t = 0; t < m.mesh.num_tets(); ++t) {
+    if (m.tet_piece[static_cast<std::size_t>(t)] != right) continue;
+    for (int k = 0; k < 4; ++k) b.right_node[static_cast<std::size_t>(m.mesh.tets()(t, k))] = 1;
+  }
+  return b;
+}
+
+// The surface's vertices with the right piece moved by `shift` along x.
+Points shifted(const CutBlock& b, double shift) {
+  Points nodes = b.result.mesh.mesh.rest();
+  for (Index n = 0; n < nodes.rows(); ++n) {
+    if (b.right_node[static_cast<std::size_t>(n)]) nodes(n, 0) += shift;
+  }
+  return b.result.surface.positions(b.result.mesh, nodes);
+}
+
+TEST(SurfaceIntersections, AFreshCutIsNotACollision) {
+  const CutBlock b = halves();
+  const SurfaceIntersections r = count_surface_intersections(b.result.surface, b.copies, shifted(b, 0));
+  EXPECT_EQ(r.intersecting_pairs, 0);
+  EXPECT_GT(r.candidate_pairs, 0);  // the two cut faces, face to face, were looked at
+  EXPECT_EQ(r.degenerate_triangles, 0);
+}
+
+TEST(SurfaceIntersections, HalvesPushedTogetherIntersectAndPulledApartDoNot) {
+  const CutBlock b = halves();
+  const SurfaceIntersections pushed = count_surface_intersections(b.result.surface, b.copies, shifted(b, -0.2));
+  EXPECT_GT(pushed.intersecting_pairs, 10);
+  ASSERT_FALSE(pushed.examples.empty());
+  EXPECT_LE(pushed.examples.size(), 16u);
+  for (const auto& [t, u] : pushed.examples) {
+    EXPECT_LT(t, u);
+    EXPECT_NE(b.result.surface.triangle_tet[static_cast<std::size_t>(t)], b.result.surface.triangle_tet[static_cast<std::size_t>(u)]);
+  }
+  EXPECT_EQ(count_surface_intersections(b.result.surface, b.copies, shifted(b, 0.2)).intersecting_pairs, 0);
+}
+
+TEST(SurfaceIntersections, OnceOpenedTheSidesOfACutCountAsSoonAsTheyCross) {
+  const CutBlock b = halves();
+  // Apart by 1e-12: parallel faces, no common point. Across by 1e-12: the halves overlap.
+  EXPECT_EQ(count_surface_intersections(b.result.surface, b.copies, shifted(b, 1e-12)).intersecting_pairs, 0);
+  EXPECT_GT(count_surface_intersections(b.result.surface, b.copies, shifted(b, -1e-12)).intersecting_pairs, 0);
+}
+
+// One piece: an incision x = 0.5 from the top down to z = 0.3. Its right lip, pushed left far
+// from the incision's end, passes through the left lip: parts of one piece, seen.
+TEST(SurfaceIntersections, LipsOfAnIncisionCrossingAreSeen) {
+  Cutter cutter(make_grid(Box{}, {6, 6, 6}, 5));
+  TriangleSurface incision;
+  incision.vertices.resize(4, 3);
+  incision.vertices << 0.5, -1, 0.3, 0.5, 2, 0.3, 0.5, 2, 2, 0.5, -1, 2;
+  incision.triangles.resize(2, 3);
+  incision.triangles << 0, 1, 2, 0, 2, 3;
+  cutter.cut(incision);
+  const CutResult r = cutter.result();
+  ASSERT_EQ(r.mesh.num_pieces(), 1);
+  const MaterialSurface& surface = r.surface;
+  // The right lip's copies: those whose cut faces look to -x.
+  std::vector<std::uint8_t> moved(static_cast<std::size_t>(r.mesh.mesh.num_nodes()), 0);
+  const auto& copies = cutter.tet_nodes();
+  for (Index t = 0; t < surface.surface.num_triangles(); ++t) {
+    if (surface.triangle_source[static_cast<std::size_t>(t)] < 0) continue;
+    const Vec3 a = surface.surface.vertices.row(surface.surface.triangles(t, 0)).transpose();
+    const Vec3 b = surface.surface.vertices.row(surface.surface.triangles(t, 1)).transpose();
+    const Vec3 c = surface.surface.vertices.row(surface.surface.triangles(t, 2)).transpose();
+    if ((b - a).cross(c - a).x() >= 0 || a.z() < 0.75) continue;
+    for (const Index n : copies[static_cast<std::size_t>(surface.triangle_tet[static_cast<std::size_t>(t)])]) {
+      if (r.mesh.mesh.rest()(n, 2) > 0.7) moved[static_cast<std::size_t>(n)] = 1;
+    }
+  }
+  Points nodes = r.mesh.mesh.rest();
+  EXPECT_EQ(count_surface_intersections(surface, copies, surface.positions(r.mesh, nodes)).intersecting_pairs, 0);
+  for (Index n = 0; n < nodes.rows(); ++n) {
+    if (moved[static_cast<std::size_t>(n)]) nodes(n, 0) -= 0.1;
+  }
+  EXPECT_GT(count_surface_intersections(surface, copies, surface.positions(r.mesh, nodes)).intersecting_pairs, 0);
+}
+
+TEST(SurfaceIntersections, FlatTrianglesAreSkippedAndSizesChecked) {
+  const CutBlock b = halves();
+  Points flat = shifted(b, 0);
+  flat.col(2).setZero();  // everything squashed onto z = 0
+  const SurfaceIntersections r = count_surface_intersections(b.result.surface, b.copies, flat);
+  EXPECT_GT(r.degenerate_triangles, 0);
+  EXPECT_THROW(count_surface_intersections(b.result.surface, b.copies, Points(3, 3)), Error);
+}
+
+}  // namespace
+}  // namespace tetcut
