@@ -670,6 +670,7 @@ void add_sim_command(CLI::App& app, Action& action) {
     bool png = false;
     fs::path animation;
     double fps = 0;
+    bool check_intersections = false;
   };
   auto options = std::make_shared<Options>();
   CLI::App* command = app.add_subcommand(
@@ -687,6 +688,10 @@ void add_sim_command(CLI::App& app, Action& action) {
   command->add_option("--fps", options->fps, "Frames per second of the animation (default: real time, 1 / output_every, "
                                              "within 1 to 60)")
       ->check(CLI::Range(0.1, 240.0));
+  command->add_flag("--check-intersections", options->check_intersections,
+                    "Count, at each output frame, the pairs of material-surface triangles of different tet copies that "
+                    "intersect (exact tests; pairs sharing a vertex, or a point of a cut not yet opened, excluded); "
+                    "summary.json gives them per frame and their maximum");
   command->callback([options, &action] {
     action = [options] {
       if (!options->animation.empty()) {
@@ -699,6 +704,7 @@ void add_sim_command(CLI::App& app, Action& action) {
       const Scene scene = load_scene(options->scene);
       SceneRunOptions run;
       run.max_frames = options->frames;
+      run.check_intersections = options->check_intersections;
       const bool terminal = isatty(fileno(stderr)) != 0;
       const auto start = Clock::now();
       run.progress = [&](int frame, int expected) {
@@ -748,6 +754,10 @@ void add_sim_command(CLI::App& app, Action& action) {
       fmt::print("  ms per step      {:.2f} (cut {:.2f}, surface {:.2f}, remesh {:.2f}, step {:.2f}); median {:.2f}, max {:.2f}\n",
                  (t.cut + t.surface + t.remesh + t.step) * per_step, t.cut * per_step, t.surface * per_step, t.remesh * per_step,
                  t.step * per_step, summary.step_ms_median, summary.step_ms_max);
+      if (options->check_intersections) {
+        fmt::print("  intersections    at most {} pair(s) of surface triangles of different copies, over {} frames\n",
+                   summary.max_intersecting_pairs, summary.intersecting_pairs.size());
+      }
       if (summary.unconverged_steps > 0) {
         fmt::print(stderr, "tetcut: warning: {} step(s) stopped before Newton converged\n", summary.unconverged_steps);
       }

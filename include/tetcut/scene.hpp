@@ -149,6 +149,9 @@ struct SceneRunOptions {
   std::function<void(int, int)> progress;
   /// Called with each output frame's material surface (e.g. to render it).
   std::function<void(int, const TriangleSurface&)> frame_surface;
+  /// Count, at each output frame, the pairs of surface triangles of different tet copies that
+  /// intersect (count_surface_intersections): SceneSummary::intersecting_pairs.
+  bool check_intersections = false;
 };
 
 /// Wall time of a run by stage, in seconds (totals).
@@ -180,6 +183,10 @@ struct SceneSummary {
   /// when they were attached (how far the incision had opened) and at the end (how well it closed).
   Index springs = 0;
   double spring_gap_when_attached = 0, spring_gap_final = 0;
+  /// With SceneRunOptions::check_intersections: per output frame, the intersecting pairs of
+  /// surface triangles of different copies, and the largest count (empty and 0 otherwise).
+  std::vector<Index> intersecting_pairs;
+  Index max_intersecting_pairs = 0;
 };
 
 /// Runs the scene, writing into `directory`: mesh_NNNN.vtu (the simulation mesh, piece and

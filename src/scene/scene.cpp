@@ -2,6 +2,7 @@
 // timed cuts, transforms and springs, and write frames and ParaView series.
 
 #include <tetcut/blade.hpp>
+#include <tetcut/collision.hpp>
 #include <tetcut/cutting_surfaces.hpp>
 #include <tetcut/error.hpp>
 #include <tetcut/generators.hpp>
@@ -589,6 +590,16 @@ class SceneRunner {
       std::snprintf(name, sizeof name, "mesh_%04d.vtu", frame);
       write_tet_mesh(directory_ / name, r.mesh.mesh, mesh_fields_);
     }
+    if (options_.check_intersections) {
+      // A cut counts as opened where its sides are more than 1e-6 of the mesh apart: less is the
+      // solver's noise (a converged step settles positions to 1e-7 of the mesh's size).
+      const Points& rest = session_.surface().surface.vertices;
+      const double opened = rest.rows() > 0 ? 1e-6 * (rest.colwise().maxCoeff() - rest.colwise().minCoeff()).norm() : 0.0;
+      const SurfaceIntersections found =
+          count_surface_intersections(session_.surface(), session_.cutter().tet_nodes(), session_.surface_positions(), opened);
+      summary_.intersecting_pairs.push_back(found.intersecting_pairs);
+      summary_.max_intersecting_pairs = std::max(summary_.max_intersecting_pairs, found.intersecting_pairs);
+    }
     if (scene_.write_surface || options_.frame_surface) {
       TriangleSurface moved = session_.surface().surface;
       moved.vertices = session_.surface_positions();
@@ -635,7 +646,12 @@ class SceneRunner {
                     {"springs", s.springs},
                     {"spring_gap_when_attached", s.spring_gap_when_attached},
                     {"spring_gap_final", s.spring_gap_final}};
-    write_text_file(directory_ / "summary.json", json.dump(2) + "\n");
+    Json out = json;
+    if (options_.check_intersections) {
+      out["intersecting_pairs"] = s.intersecting_pairs;
+      out["max_intersecting_pairs"] = s.max_intersecting_pairs;
+    }
+    write_text_file(directory_ / "summary.json", out.dump(2) + "\n");
   }
 
   const Scene& scene_;

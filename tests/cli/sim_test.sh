@@ -28,6 +28,14 @@ json_check out/summary.json 'j["frames"] == 5 and j["steps"] == 20 and j["pieces
 json_check out/summary.json 'all(j["ms_per_step"][k] >= 0 for k in ("cut", "surface", "remesh", "step", "total", "median", "p99", "max"))'
 json_check out/summary.json 'j["ms_per_step"]["step"] > 0 and j["ms_per_step"]["total"] >= j["ms_per_step"]["step"] and j["ms_per_step"]["max"] >= j["ms_per_step"]["median"]'
 json_check out/summary.json 'j["max_residual"] <= 1e-7 and len(j["final_box"]) == 6 and j["final_box"][2] > -0.05 and j["mean_cg_iterations"] > 0'
+
+# --check-intersections: per frame and the maximum in summary.json, and a line of the report.
+# The fresh cut is no intersection; landing, the halves' cut faces press into each other (pieces
+# are not kept apart yet), which it counts.
+expect_exit 0 "$TETCUT" sim drop.json -o checked --check-intersections
+expect_stdout "intersections    at most"
+json_check checked/summary.json 'len(j["intersecting_pairs"]) == 5 and j["intersecting_pairs"][:3] == [0, 0, 0]'
+json_check checked/summary.json 'j["max_intersecting_pairs"] == max(j["intersecting_pairs"]) > 0'
 expect_stdout "ms per step"
 # The real-time mode: a fixed budget, and the residual it left reported.
 sed 's/"obstacles"/"solver": {"mode": "real_time", "max_cg_iterations": 2}, "obstacles"/' drop.json > budget.json

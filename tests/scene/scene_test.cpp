@@ -8,7 +8,9 @@
 #include <tetcut/scene.hpp>
 #include <tetcut/session.hpp>
 
+#include <algorithm>
 #include <cstdlib>
+#include <iterator>
 #include <fstream>
 #include <sstream>
 #include <string>
@@ -269,6 +271,47 @@ TEST(Scene, FramesLimitStopsEarly) {
   EXPECT_EQ(summary.steps, 10);
   EXPECT_EQ(calls, 3);
   EXPECT_FALSE(std::filesystem::exists(dir.path() / "out" / "mesh_0003.vtu"));
+}
+
+}  // namespace
+}  // namespace tetcut
+
+namespace tetcut {
+namespace {
+
+// Two halves of a cut block, the right one driven left through the left one or away from it
+// (nothing keeps pieces apart yet): the check sees the crossing, and nothing when they part.
+std::string halves_driven(double velocity) {
+  return R"({"mesh": {"grid": {"box": [0, 0, 0, 1, 1, 1], "cells": [3, 3, 3]}},
+    "material": {"youngs_modulus": 1e5, "density": 100}, "gravity": [0, 0, 0],
+    "time": {"dt": 0.02, "duration": 0.3, "output_every": 0.1},
+    "cuts": [{"time": 0, "plane": {"centre": [0.5, 0.5, 0.5], "normal": [1, 0, 0], "size": 3}}],
+    "move": [{"box": [0.8, -1, -1, 2, 2, 2], "velocity": [)" + std::to_string(velocity) + R"(, 0, 0]}],
+    "output": {"mesh": false, "surface": false}})";
+}
+
+TEST(Scene, CheckIntersectionsCountsPiecesPassingThroughEachOther) {
+  testing::TempDir dir;
+  SceneRunOptions check;
+  check.check_intersections = true;
+  const SceneSummary through = run_scene(load_scene(write_scene(dir.path(), halves_driven(-1))), dir.path() / "through", check);
+  EXPECT_EQ(through.pieces, 2);
+  ASSERT_EQ(through.intersecting_pairs.size(), 4u);  // frames at 0, 0.1, 0.2, 0.3 s
+  EXPECT_EQ(through.intersecting_pairs[0], 0);      // fresh cut: its sides coincide
+  EXPECT_GT(through.max_intersecting_pairs, 10);
+  EXPECT_EQ(through.max_intersecting_pairs, *std::max_element(through.intersecting_pairs.begin(), through.intersecting_pairs.end()));
+  std::ifstream summary(dir.path() / "through" / "summary.json");
+  const std::string text((std::istreambuf_iterator<char>(summary)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find("\"max_intersecting_pairs\": " + std::to_string(through.max_intersecting_pairs)), std::string::npos);
+
+  const SceneSummary apart = run_scene(load_scene(write_scene(dir.path(), halves_driven(1))), dir.path() / "apart", check);
+  EXPECT_EQ(apart.max_intersecting_pairs, 0);
+  // Not asked: nothing counted, no key.
+  const SceneSummary unchecked = run_scene(load_scene(write_scene(dir.path(), halves_driven(-1))), dir.path() / "plain");
+  EXPECT_TRUE(unchecked.intersecting_pairs.empty());
+  std::ifstream plain(dir.path() / "plain" / "summary.json");
+  const std::string plain_text((std::istreambuf_iterator<char>(plain)), std::istreambuf_iterator<char>());
+  EXPECT_EQ(plain_text.find("intersecting"), std::string::npos);
 }
 
 }  // namespace
