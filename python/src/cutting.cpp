@@ -2,6 +2,7 @@
 // material surface and result, embedding, and blades.
 
 #include <tetcut/blade.hpp>
+#include <tetcut/collision.hpp>
 #include <tetcut/cutter.hpp>
 #include <tetcut/embed.hpp>
 
@@ -161,6 +162,31 @@ void bind_cutting(py::module_& m) {
         py::arg("V"), py::arg("F"), py::arg("spacing"), "A BCC lattice covering the surface with a cube's margin. Returns (V, T).");
   m.def("spacing_for_cubes", [](py::handle V, py::handle F, Index cubes) { return spacing_for_cubes(surface_of(V, F), cubes); },
         py::arg("V"), py::arg("F"), py::arg("cubes"), "The spacing that puts `cubes` BCC cubes along the surface's longest side.");
+
+  py::class_<SurfaceIntersections>(m, "SurfaceIntersections", "Where the material surface passes through itself.")
+      .def_readonly("intersecting_pairs", &SurfaceIntersections::intersecting_pairs)
+      .def_readonly("candidate_pairs", &SurfaceIntersections::candidate_pairs)
+      .def_readonly("degenerate_triangles", &SurfaceIntersections::degenerate_triangles)
+      .def_property_readonly("examples", [](const SurfaceIntersections& r) {
+        py::array_t<Index> out({static_cast<py::ssize_t>(r.examples.size()), py::ssize_t{2}});
+        for (std::size_t i = 0; i < r.examples.size(); ++i) {
+          out.mutable_at(static_cast<py::ssize_t>(i), 0) = r.examples[i][0];
+          out.mutable_at(static_cast<py::ssize_t>(i), 1) = r.examples[i][1];
+        }
+        return out;
+      }, "int32 (k, 2): up to 16 intersecting pairs of triangle ids");
+  m.def("count_surface_intersections", [](const MaterialSurface& surface, py::handle T, py::handle X) {
+          const auto copies = tets(T, "T", -1);
+          std::vector<std::array<Index, 4>> rows(static_cast<std::size_t>(copies.rows()));
+          for (Eigen::Index t = 0; t < copies.rows(); ++t) {
+            for (int k = 0; k < 4; ++k) rows[static_cast<std::size_t>(t)][static_cast<std::size_t>(k)] = copies(t, k);
+          }
+          const Points positions = points(X, "X");
+          py::gil_scoped_release release;
+          return count_surface_intersections(surface, rows, positions);
+        }, py::arg("surface"), py::arg("T"), py::arg("X"),
+        "Pairs of the surface's triangles of different copies that intersect, with its vertices at X (n, 3) and the cut "
+        "mesh's copies T (m, 4): exact tests; neighbours in the material and unopened cuts left out.");
 
   m.def("swept_blade", [](py::handle A, py::handle B) {
           const Points a = points(A, "A"), b = points(B, "B");

@@ -194,10 +194,11 @@ void bind_sim(py::module_& root) {
       .def_readonly("topology_changed", &SessionStep::topology_changed);
 
   py::class_<Session>(root, "Session", "A scene's cutter, simulator and material surface, advanced a step at a time while taking events.")
+      // The session reads its scene as it runs: the Scene lives at least as long (keep_alive).
       .def(py::init([](const Scene& scene) {
              py::gil_scoped_release release;
              return Session(scene);
-           }), py::arg("scene"))
+           }), py::arg("scene"), py::keep_alive<1, 2>())
       .def("advance", &Session::advance, py::call_guard<py::gil_scoped_release>(), "The scene's events due, then one step.")
       .def_property_readonly("time", &Session::time)
       .def_property_readonly("steps", &Session::steps)

@@ -196,3 +196,27 @@ def test_the_same_cut_as_the_cli(tmp_path, cli):
     np.testing.assert_array_equal(CT, result.tets)
     np.testing.assert_allclose(CV, result.vertices, atol=1e-15)
     assert tet_volumes(CV, CT).sum() == pytest.approx(tet_volumes(result.vertices, result.tets).sum(), rel=1e-14)
+
+
+def test_counting_where_the_surface_passes_through_itself():
+    V, T = figure4_cube()
+    cutter = tetcut.Cutter(V, T)
+    cutter.cut(*square(0, 0.5))
+    result = cutter.result()
+    s = result.surface
+    assert tetcut.count_surface_intersections(s, result.tets, s.positions(result.tets, result.vertices)).intersecting_pairs == 0
+    X = result.vertices.copy()
+    right = np.unique(result.tets[result.tet_piece == result.tet_piece[np.argmax(X[result.tets].mean(axis=1)[:, 0])]])
+    X[right, 0] -= 0.2  # the right half into the left
+    found = tetcut.count_surface_intersections(s, result.tets, s.positions(result.tets, X))
+    assert found.intersecting_pairs > 0 and found.examples.shape[1] == 2
+
+
+def test_a_session_keeps_its_scene_alive():
+    import gc
+    session = tetcut.Session(tetcut.parse_scene(
+        '{"mesh": {"grid": {"box": [0, 0, 0, 1, 1, 1], "cells": [2, 2, 2]}}, "time": {"dt": 0.01, "duration": 0.05}}', "scene.json"))
+    gc.collect()
+    for _ in range(5):
+        session.advance()
+    assert session.steps == 5
