@@ -40,6 +40,7 @@ class Session {
  public:
   /// The scene's set-up: its mesh (or the surface embedded in a lattice), material, gravity and
   /// solver, pins, moves, obstacles, contact stiffness. Its timed events are applied by advance().
+  /// The session reads `scene` as it runs: it must outlive the session.
   explicit Session(const Scene& scene);
   ~Session();
   Session(Session&&) noexcept;
