@@ -33,7 +33,8 @@ BladePose blade_at(double x, double depth, double z = 0.53) { return {Vec3(x, -0
 
 TEST(Session, AStrokeBesideTheObjectChangesNothing) {
   testing::TempDir dir;
-  Session session(hanging_block(dir.path()));
+  const Scene scene = hanging_block(dir.path());  // outlives the session, which reads it
+  Session session(scene);
   session.advance();
   const Index tets = session.simulator().num_tets();
   session.blade(blade_at(-0.6, 1.1));
