@@ -5,10 +5,14 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 ./scripts/install-deps.sh
 jobs=$(nproc)
+# Each phase's wall time, so that a slow CI run says where its minutes went.
 for preset in release asan; do
   echo "== $preset: configure and build"
+  start=$SECONDS
   cmake --preset "$preset" > /dev/null
   cmake --build --preset "$preset" -j "$jobs"
-  echo "== $preset: test"
+  echo "== $preset: built in $((SECONDS - start)) s; test"
+  start=$SECONDS
   ctest --preset "$preset" -j "$jobs"
+  echo "== $preset: tested in $((SECONDS - start)) s"
 done

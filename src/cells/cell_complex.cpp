@@ -1,5 +1,7 @@
 #include "cells/cell_complex.hpp"
 
+#include <tetcut/error.hpp>
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -722,7 +724,7 @@ void CellComplex::insert_triangle(const PreparedTriangle& triangle, std::span<co
 
 void CellComplex::insert_triangles(std::span<const PreparedTriangle> triangles, std::span<const std::vector<Index>> tets,
                                    std::vector<Index>* touched) {
-  if (triangles.size() != tets.size()) throw std::invalid_argument("insert_triangles: one list of tets per triangle");
+  if (triangles.size() != tets.size()) throw Error(ErrorKind::kInvalidArgument, "insert_triangles: one list of tets per triangle");
   const auto first_stamp = static_cast<std::int32_t>(inserted_.size());
   for (const PreparedTriangle& t : triangles) inserted_.push_back({t.plane, t.walls, t.cut_id});
 

@@ -4,6 +4,8 @@
 
 #include <numeric>
 
+#include "util/union_find.hpp"
+
 namespace tetcut::components {
 namespace {
 
@@ -23,14 +25,9 @@ void tet_components(const CellComplex& complex, Index tet, MaterialComponents* r
   const auto& facets = complex.facets();
   std::vector<CellId> members;
   for (CellId c = complex.first_cell(tet); c >= 0; c = cells[c].next_in_tet) members.push_back(c);
-  // Local union-find over the tet's cells; cell_component holds each cell's local index meanwhile.
-  std::vector<std::int32_t> parent(members.size());
-  std::iota(parent.begin(), parent.end(), 0);
+  // Disjoint sets over the tet's cells, by their local index (which cell_component holds meanwhile).
+  UnionFind classes(members.size());
   for (std::size_t i = 0; i < members.size(); ++i) result->cell_component[members[i]] = static_cast<std::int32_t>(i);
-  const auto find = [&](std::int32_t x) {
-    while (parent[x] != x) x = parent[x] = parent[parent[x]];
-    return x;
-  };
   for (const CellId c : members) {
     if (!cells[c].material) continue;
     for (const cells::FacetId f : cells[c].facets) {
@@ -38,8 +35,7 @@ void tet_components(const CellComplex& complex, Index tet, MaterialComponents* r
       if (facet.covered() || facet.front != c) continue;  // each facet once, from its front cell
       const cells::Side other = facet.back;
       if (!cells::is_cell(other) || cells[other].tet != tet || !cells[other].material) continue;
-      const std::int32_t a = find(result->cell_component[c]), b = find(result->cell_component[other]);
-      if (a != b) parent[std::max(a, b)] = std::min(a, b);
+      classes.join(result->cell_component[c], result->cell_component[other]);
     }
   }
   const Vec3 origin = complex.mesh().rest().row(complex.mesh().tets()(tet, 0)).transpose();
@@ -54,7 +50,7 @@ void tet_components(const CellComplex& complex, Index tet, MaterialComponents* r
       continue;
     }
     result->cell_volume6[c] = complex.cell_volume6(c, origin);
-    const std::int32_t root = find(static_cast<std::int32_t>(i));
+    const Index root = classes.find(static_cast<Index>(i));
     if (label[root] < 0) label[root] = count++;
     result->cell_component[c] = label[root];
   }

@@ -27,6 +27,7 @@
 
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
+#include "util/stopwatch.hpp"
 
 namespace tetcut {
 namespace {
@@ -308,8 +309,6 @@ MaterialSurface Cutter::surface() {
 }
 
 CutResult Cutter::result() {
-  using Clock = std::chrono::steady_clock;
-  const auto seconds_since = [](Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); };
   State& s = *state_;
   auto start = Clock::now();
   const connectivity::Pieces pieces = connectivity::find_pieces(s.complex, s.components, s.copies);

@@ -9,12 +9,11 @@
 
 #include "cutter/cutter_state.hpp"
 #include "embed/material_classification.hpp"
+#include "util/stopwatch.hpp"
 
 namespace tetcut {
 namespace {
 
-using Clock = std::chrono::steady_clock;
-double seconds_since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
 
 // Keeps only the material of piece `piece` (pieces of the copies as rebuilt); the rest is void.
 void keep_piece(cells::CellComplex& complex, const connectivity::TetCopies& copies,

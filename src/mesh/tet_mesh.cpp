@@ -73,7 +73,7 @@ double signed_volume(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d)
 
 TetAdjacency build_adjacency(const Tets& tets, Index num_nodes) {
   if (tets.size() > 0 && (tets.minCoeff() < 0 || tets.maxCoeff() >= num_nodes)) {
-    throw std::invalid_argument("build_adjacency: a node id outside [0, num_nodes)");
+    throw Error(ErrorKind::kInvalidArgument, "build_adjacency: a node id outside [0, num_nodes)");
   }
   const Index num_tets = static_cast<Index>(tets.rows());
   TetAdjacency adj;

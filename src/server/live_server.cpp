@@ -35,6 +35,7 @@
 
 #include "render/viewer_assets.hpp"
 #include "server/live_protocol.hpp"
+#include "util/stopwatch.hpp"
 
 namespace tetcut {
 namespace {
@@ -44,7 +45,6 @@ namespace beast = boost::beast;
 namespace http = beast::http;
 namespace websocket = beast::websocket;
 using tcp = asio::ip::tcp;
-using Clock = std::chrono::steady_clock;
 using Json = nlohmann::json;
 using Message = std::shared_ptr<const std::string>;
 
@@ -56,7 +56,6 @@ constexpr std::size_t kMaxQueuedTexts = 64;
 constexpr std::size_t kMaxWebSocketMessage = 1 << 20;
 constexpr double kStatsSeconds = 0.25;
 
-double ms_since(Clock::time_point start) { return std::chrono::duration<double, std::milli>(Clock::now() - start).count(); }
 
 std::string random_token() {
   std::random_device device;

@@ -13,12 +13,11 @@
 #include <limits>
 #include <optional>
 #include <string>
+#include "util/stopwatch.hpp"
 
 namespace tetcut {
 namespace {
 
-using Clock = std::chrono::steady_clock;
-double seconds_since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
 
 bool in_box(const Box& box, const Vec3& x) { return (x.array() >= box.min.array()).all() && (x.array() <= box.max.array()).all(); }
 

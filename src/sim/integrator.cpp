@@ -17,6 +17,7 @@
 
 #include <chrono>
 #include <cmath>
+#include "util/stopwatch.hpp"
 
 namespace tetcut::sim {
 namespace {
@@ -39,8 +40,6 @@ constexpr double kInexactNewton = 0.1;
 // precision is a fifth faster at 114k tets and 40% slower at 11.5k.
 constexpr Index kSinglePrecisionBlocks = 8 * 1024 * 1024 / 72;
 
-using Clock = std::chrono::steady_clock;
-double seconds_since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
 
 // The potential's terms other than elasticity, at positions `at`, for the free nodes' gradient
 // (and Hessian). A Newton step's pieces, gathered so that energy, gradient and Hessian are written
