@@ -67,6 +67,8 @@ struct MaterialSurface {
 
   /// Vertex positions for the given positions of the cut mesh's nodes (|V'| x 3), e.g. deformed.
   Points positions(const CutMesh& mesh, const Points& nodes) const;
+  /// The same with the copies' nodes given as Cutter::tet_nodes gives them.
+  Points positions(std::span<const std::array<Index, 4>> copy_nodes, const Points& nodes) const;
 };
 
 struct CutResult {

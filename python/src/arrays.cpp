@@ -67,6 +67,15 @@ Eigen::Matrix<Index, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> index_rows
 }
 
 Tets tets(py::handle value, const char* name, std::int64_t num_nodes) { return index_rows(value, name, 4, num_nodes); }
+
+std::vector<std::array<Index, 4>> tet_rows(py::handle value, const char* name, std::int64_t num_nodes) {
+  const Tets t = tets(value, name, num_nodes);
+  std::vector<std::array<Index, 4>> rows(static_cast<std::size_t>(t.rows()));
+  for (Eigen::Index r = 0; r < t.rows(); ++r) {
+    for (int k = 0; k < 4; ++k) rows[static_cast<std::size_t>(r)][static_cast<std::size_t>(k)] = t(r, k);
+  }
+  return rows;
+}
 Triangles triangles(py::handle value, const char* name, std::int64_t num_vertices) { return index_rows(value, name, 3, num_vertices); }
 
 Vec3 vec3(py::handle value, const char* name) {
@@ -102,13 +111,6 @@ TriangleSurface surface_of(py::handle V, py::handle F) {
 
 py::tuple mesh_arrays(const TetMesh& mesh) { return py::make_tuple(to_numpy(mesh.rest()), to_numpy(mesh.tets())); }
 py::tuple surface_arrays(const TriangleSurface& s) { return py::make_tuple(to_numpy(s.vertices), to_numpy(s.triangles)); }
-
-py::array_t<Index> to_numpy(const std::vector<std::array<Index, 4>>& rows) {
-  py::array_t<Index> out({static_cast<py::ssize_t>(rows.size()), py::ssize_t{4}});
-  Index* data = out.mutable_data();
-  for (std::size_t r = 0; r < rows.size(); ++r) std::copy(rows[r].begin(), rows[r].end(), data + 4 * r);
-  return out;
-}
 
 py::array_t<double> to_numpy(const Vec3& v) {
   py::array_t<double> out(3);

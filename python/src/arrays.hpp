@@ -11,6 +11,7 @@
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 
+#include <array>
 #include <cstdint>
 #include <span>
 #include <string>
@@ -28,6 +29,8 @@ Points points(py::handle array, const char* name);
 Eigen::Matrix<Index, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> index_rows(py::handle array, const char* name, int columns,
                                                                                  std::int64_t bound);
 Tets tets(py::handle array, const char* name, std::int64_t num_nodes);
+/// The same as the rows Cutter::tet_nodes gives (what the surface and collision functions take).
+std::vector<std::array<Index, 4>> tet_rows(py::handle array, const char* name, std::int64_t num_nodes);
 Triangles triangles(py::handle array, const char* name, std::int64_t num_vertices);
 /// A point: any sequence of three finite numbers (a tuple, a list, a numpy array).
 Vec3 vec3(py::handle value, const char* name);
@@ -61,7 +64,13 @@ template <typename T>
 py::array_t<T> to_numpy(const std::vector<T>& values) {
   return to_numpy(std::span<const T>(values));
 }
-py::array_t<Index> to_numpy(const std::vector<std::array<Index, 4>>& rows);
+template <std::size_t N>
+py::array_t<Index> to_numpy(const std::vector<std::array<Index, N>>& rows) {
+  py::array_t<Index> out({static_cast<py::ssize_t>(rows.size()), static_cast<py::ssize_t>(N)});
+  Index* data = out.mutable_data();
+  for (std::size_t r = 0; r < rows.size(); ++r) std::copy(rows[r].begin(), rows[r].end(), data + N * r);
+  return out;
+}
 py::array_t<double> to_numpy(const Vec3& v);
 
 }  // namespace tetcut::python

@@ -21,17 +21,15 @@ KeepMaterial keep_of(const std::string& keep) {
   throw py::value_error("keep must be 'inside', 'largest' or 'point', not '" + keep + "'");
 }
 
-// Where each vertex of `surface` is when the cut mesh's nodes are at `nodes`.
-Points surface_positions(const MaterialSurface& surface, const Tets& copies, const Points& nodes) {
-  Points out(surface.surface.num_vertices(), 3);
-  for (Index v = 0; v < surface.surface.num_vertices(); ++v) {
-    const Index copy = surface.vertex_tet[static_cast<std::size_t>(v)];
-    if (copy < 0 || copy >= copies.rows()) throw py::value_error("T has no tet copy " + std::to_string(copy) + ": pass the cut mesh's tets");
-    Vec3 x = Vec3::Zero();
-    for (int k = 0; k < 4; ++k) x += surface.vertex_weights(v, k) * nodes.row(copies(copy, k)).transpose();
-    out.row(v) = x.transpose();
+// The cut mesh's copies T (checked against the nodes, and against the copies the surface names).
+std::vector<std::array<Index, 4>> copies_for(const MaterialSurface& surface, py::handle T, std::int64_t num_nodes) {
+  std::vector<std::array<Index, 4>> copies = tet_rows(T, "T", num_nodes);
+  for (const Index copy : surface.vertex_tet) {
+    if (copy < 0 || static_cast<std::size_t>(copy) >= copies.size()) {
+      throw py::value_error("T has no tet copy " + std::to_string(copy) + ": pass the cut mesh's tets");
+    }
   }
-  return out;
+  return copies;
 }
 
 }  // namespace
@@ -49,7 +47,7 @@ void bind_cutting(py::module_& m) {
       .def_property_readonly("triangle_tet", [](const MaterialSurface& s) { return to_numpy(s.triangle_tet); }, "int32 (k,): the copy each bounds")
       .def("positions", [](const MaterialSurface& s, py::handle T, py::handle X) {
              const Points nodes = points(X, "X");
-             return to_numpy(surface_positions(s, tets(T, "T", nodes.rows()), nodes));
+             return to_numpy(s.positions(copies_for(s, T, nodes.rows()), nodes));
            }, py::arg("T"), py::arg("X"),
            "Vertex positions (n, 3) for the cut mesh's tets T and node positions X (e.g. a simulator's).");
 
@@ -167,23 +165,13 @@ void bind_cutting(py::module_& m) {
       .def_readonly("intersecting_pairs", &SurfaceIntersections::intersecting_pairs)
       .def_readonly("candidate_pairs", &SurfaceIntersections::candidate_pairs)
       .def_readonly("degenerate_triangles", &SurfaceIntersections::degenerate_triangles)
-      .def_property_readonly("examples", [](const SurfaceIntersections& r) {
-        py::array_t<Index> out({static_cast<py::ssize_t>(r.examples.size()), py::ssize_t{2}});
-        for (std::size_t i = 0; i < r.examples.size(); ++i) {
-          out.mutable_at(static_cast<py::ssize_t>(i), 0) = r.examples[i][0];
-          out.mutable_at(static_cast<py::ssize_t>(i), 1) = r.examples[i][1];
-        }
-        return out;
-      }, "int32 (k, 2): up to 16 intersecting pairs of triangle ids");
+      .def_property_readonly("examples", [](const SurfaceIntersections& r) { return to_numpy(r.examples); },
+                             "int32 (k, 2): up to 16 intersecting pairs of triangle ids");
   m.def("count_surface_intersections", [](const MaterialSurface& surface, py::handle T, py::handle X) {
-          const auto copies = tets(T, "T", -1);
-          std::vector<std::array<Index, 4>> rows(static_cast<std::size_t>(copies.rows()));
-          for (Eigen::Index t = 0; t < copies.rows(); ++t) {
-            for (int k = 0; k < 4; ++k) rows[static_cast<std::size_t>(t)][static_cast<std::size_t>(k)] = copies(t, k);
-          }
+          const std::vector<std::array<Index, 4>> copies = tet_rows(T, "T", -1);
           const Points positions = points(X, "X");
           py::gil_scoped_release release;
-          return count_surface_intersections(surface, rows, positions);
+          return count_surface_intersections(surface, copies, positions);
         }, py::arg("surface"), py::arg("T"), py::arg("X"),
         "Pairs of the surface's triangles of different copies that intersect, with its vertices at X (n, 3) and the cut "
         "mesh's copies T (m, 4): exact tests; neighbours in the material and unopened cuts left out.");

@@ -34,6 +34,12 @@ sim::EmbeddedPoint embedded_point(Index tet, py::handle weights, Index num_tets)
   return {tet, Eigen::Vector4d(w(0, 0), w(1, 0), w(2, 0), w(3, 0))};
 }
 
+// A node of the simulator, checked (an IndexError, not a crash, for one it lacks).
+Index node_of(const sim::Simulator& s, Index node) {
+  if (node < 0 || node >= s.num_nodes()) throw py::index_error("no node " + std::to_string(node));
+  return node;
+}
+
 py::dict stage_seconds(const SceneStageSeconds& s) {
   py::dict d;
   d["cut"] = s.cut;
@@ -136,16 +142,13 @@ void bind_sim(py::module_& root) {
         return to_numpy(std::span<const double>(mass.data(), static_cast<std::size_t>(mass.size())));
       })
       .def("pin", [](Simulator& s, Index node) {
-             if (node < 0 || node >= s.num_nodes()) throw py::index_error("no node " + std::to_string(node));
-             s.pin(node);
+             s.pin(node_of(s, node));
            }, py::arg("node"), "Holds a node where it is.")
       .def("move_to", [](Simulator& s, Index node, py::handle target) {
-             if (node < 0 || node >= s.num_nodes()) throw py::index_error("no node " + std::to_string(node));
-             s.move_to(node, vec3(target, "target"));
+             s.move_to(node_of(s, node), vec3(target, "target"));
            }, py::arg("node"), py::arg("target"), "Moves a node to target over the next step.")
       .def("release", [](Simulator& s, Index node) {
-             if (node < 0 || node >= s.num_nodes()) throw py::index_error("no node " + std::to_string(node));
-             s.release(node);
+             s.release(node_of(s, node));
            }, py::arg("node"), "Frees a pinned or moved node.")
       .def("step", &Simulator::step, py::arg("options") = StepOptions{}, py::call_guard<py::gil_scoped_release>(),
            "One backward Euler step; returns a StepReport.")

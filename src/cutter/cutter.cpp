@@ -27,6 +27,7 @@
 
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
+
 #include "util/stopwatch.hpp"
 
 namespace tetcut {
@@ -345,15 +346,29 @@ std::vector<double> CutMesh::material_fractions() const {
   return fraction;
 }
 
-Points MaterialSurface::positions(const CutMesh& mesh, const Points& nodes) const {
-  Points p(surface.num_vertices(), 3);
-  const Tets& tets = mesh.mesh.tets();
-  for (Index v = 0; v < surface.num_vertices(); ++v) {
+namespace {
+
+// Each vertex placed by its weights in its copy's nodes, `corner(copy, k)` naming node k.
+template <typename Corner>
+Points place_vertices(const MaterialSurface& s, const Points& nodes, Corner corner) {
+  Points p(s.surface.num_vertices(), 3);
+  for (Index v = 0; v < s.surface.num_vertices(); ++v) {
     Vec3 x = Vec3::Zero();
-    for (int k = 0; k < 4; ++k) x += vertex_weights(v, k) * nodes.row(tets(vertex_tet[v], k)).transpose();
+    for (int k = 0; k < 4; ++k) x += s.vertex_weights(v, k) * nodes.row(corner(s.vertex_tet[v], k)).transpose();
     p.row(v) = x.transpose();
   }
   return p;
+}
+
+}  // namespace
+
+Points MaterialSurface::positions(const CutMesh& mesh, const Points& nodes) const {
+  const Tets& tets = mesh.mesh.tets();
+  return place_vertices(*this, nodes, [&](Index copy, int k) { return tets(copy, k); });
+}
+
+Points MaterialSurface::positions(std::span<const std::array<Index, 4>> copy_nodes, const Points& nodes) const {
+  return place_vertices(*this, nodes, [&](Index copy, int k) { return copy_nodes[static_cast<std::size_t>(copy)][static_cast<std::size_t>(k)]; });
 }
 
 }  // namespace tetcut

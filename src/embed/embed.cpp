@@ -14,7 +14,6 @@
 namespace tetcut {
 namespace {
 
-
 // Keeps only the material of piece `piece` (pieces of the copies as rebuilt); the rest is void.
 void keep_piece(cells::CellComplex& complex, const connectivity::TetCopies& copies,
                 const connectivity::Pieces& pieces, Index piece) {

@@ -21,6 +21,7 @@
 #include <fstream>
 #include <numbers>
 #include <sstream>
+
 #include "util/stopwatch.hpp"
 
 namespace tetcut {
@@ -490,7 +491,6 @@ BladePose SceneScalpel::at(double t) const {
 }
 
 namespace {
-
 
 // The .pvd series of one kind of output, listing frames 0 .. times.size() - 1.
 void write_frame_series(const std::filesystem::path& path, const std::string& prefix, const std::string& extension,

@@ -56,7 +56,6 @@ constexpr std::size_t kMaxQueuedTexts = 64;
 constexpr std::size_t kMaxWebSocketMessage = 1 << 20;
 constexpr double kStatsSeconds = 0.25;
 
-
 std::string random_token() {
   std::random_device device;
   std::string token;

@@ -13,11 +13,11 @@
 #include <limits>
 #include <optional>
 #include <string>
+
 #include "util/stopwatch.hpp"
 
 namespace tetcut {
 namespace {
-
 
 bool in_box(const Box& box, const Vec3& x) { return (x.array() >= box.min.array()).all() && (x.array() <= box.max.array()).all(); }
 
@@ -359,18 +359,7 @@ int Session::num_hooks() const {
   return static_cast<int>(std::count_if(state_->hooks.begin(), state_->hooks.end(), [](const State::Hook& h) { return h.held; }));
 }
 
-Points Session::surface_positions() {
-  const MaterialSurface& s = surface();
-  const auto& tets = state_->cutter.tet_nodes();
-  const Points& x = state_->sim.positions();
-  Points p(s.surface.num_vertices(), 3);
-  for (Index v = 0; v < s.surface.num_vertices(); ++v) {
-    Vec3 y = Vec3::Zero();
-    for (int k = 0; k < 4; ++k) y += s.vertex_weights(v, k) * x.row(tets[s.vertex_tet[v]][k]).transpose();
-    p.row(v) = y.transpose();
-  }
-  return p;
-}
+Points Session::surface_positions() { return surface().positions(state_->cutter.tet_nodes(), state_->sim.positions()); }
 
 SessionStep Session::advance() {
   State& s = *state_;

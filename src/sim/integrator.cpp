@@ -17,6 +17,7 @@
 
 #include <chrono>
 #include <cmath>
+
 #include "util/stopwatch.hpp"
 
 namespace tetcut::sim {
@@ -39,7 +40,6 @@ constexpr double kInexactNewton = 0.1;
 // and its products become bound by memory (8 MB; a 114k-tet matrix has 19 MB): measured, single
 // precision is a fifth faster at 114k tets and 40% slower at 11.5k.
 constexpr Index kSinglePrecisionBlocks = 8 * 1024 * 1024 / 72;
-
 
 // The potential's terms other than elasticity, at positions `at`, for the free nodes' gradient
 // (and Hessian). A Newton step's pieces, gathered so that energy, gradient and Hessian are written

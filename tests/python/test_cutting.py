@@ -101,18 +101,24 @@ def test_a_cut_placed_on_the_deformed_mesh_follows_its_motion():
     assert again.result().num_pieces == 2
 
 
-def test_the_surface_follows_the_nodes():
+def cube_cut_in_half(axis):
+    """Figure 4's cube cut by the plane x[axis] = 0.5: the result, and which copies are the upper half's."""
     V, T = figure4_cube()
     cutter = tetcut.Cutter(V, T)
-    cutter.cut(*square(2, 0.5))
+    cutter.cut(*square(axis, 0.5))
     result = cutter.result()
+    upper_piece = result.tet_piece[np.argmax(result.vertices[result.tets].mean(axis=1)[:, axis])]
+    return result, result.tet_piece == upper_piece
+
+
+def test_the_surface_follows_the_nodes():
+    result, top = cube_cut_in_half(2)
     s = result.surface
     assert s.vertex_weights.shape == (len(s.vertices), 4)
     np.testing.assert_allclose(s.vertex_weights.sum(axis=1), 1, atol=1e-14)
     np.testing.assert_allclose(s.positions(result.tets, result.vertices), s.vertices, atol=1e-12)
     # Lift the top piece: its surface goes with it.
     X = result.vertices.copy()
-    top = result.tet_piece == result.tet_piece[np.argmax(X[result.tets].mean(axis=1)[:, 2])]
     lifted = np.unique(result.tets[top])
     X[lifted, 2] += 1
     moved = s.positions(result.tets, X)
@@ -199,15 +205,11 @@ def test_the_same_cut_as_the_cli(tmp_path, cli):
 
 
 def test_counting_where_the_surface_passes_through_itself():
-    V, T = figure4_cube()
-    cutter = tetcut.Cutter(V, T)
-    cutter.cut(*square(0, 0.5))
-    result = cutter.result()
+    result, right = cube_cut_in_half(0)
     s = result.surface
     assert tetcut.count_surface_intersections(s, result.tets, s.positions(result.tets, result.vertices)).intersecting_pairs == 0
     X = result.vertices.copy()
-    right = np.unique(result.tets[result.tet_piece == result.tet_piece[np.argmax(X[result.tets].mean(axis=1)[:, 0])]])
-    X[right, 0] -= 0.2  # the right half into the left
+    X[np.unique(result.tets[right]), 0] -= 0.2  # the right half into the left
     found = tetcut.count_surface_intersections(s, result.tets, s.positions(result.tets, X))
     assert found.intersecting_pairs > 0 and found.examples.shape[1] == 2
 
