@@ -193,7 +193,10 @@ struct LiveServer::Impl {
   void broadcast_text(std::string text);
 
   void publish_topology_and_frame() {
-    publish(std::make_shared<const std::string>(live::encode_topology(++topology_version, *session, &pieces)));
+    auto topology = std::make_shared<const std::string>(live::encode_topology(++topology_version, *session, &pieces));
+    // /api/state tells the new pieces before any page can see them (not after the next step).
+    refresh_state();
+    publish(std::move(topology));
   }
 
   // After a cut: the new topology (and a frame) to the pages, timed.
@@ -239,6 +242,14 @@ struct LiveServer::Impl {
         {"dt", scene.step.dt},
     };
     return figures_now.dump();
+  }
+
+  // The state that GET /api/state answers with, brought up to date; returned for the pages.
+  std::string refresh_state() {
+    std::string text = state_now();
+    std::lock_guard lock(mutex);
+    state = text;
+    return text;
   }
 
   void simulate() {
@@ -306,11 +317,7 @@ struct LiveServer::Impl {
           window_steps = 0;
           window_step_ms = 0;
         }
-        std::string text = state_now();
-        {
-          std::lock_guard lock(mutex);
-          state = text;
-        }
+        std::string text = refresh_state();
         if (window >= kStatsSeconds) broadcast_text(std::move(text));
       }
       if (due) next += dt;
