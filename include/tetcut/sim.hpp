@@ -142,6 +142,13 @@ struct StepReport {
   /// Wall time of the step's stages in seconds: element energies, stresses and Hessians with
   /// their assembly; the linear solves; the line search (energies and gradients of trial points).
   double assemble_seconds = 0, solve_seconds = 0, line_search_seconds = 0;
+  /// Surface contact (Simulator::set_contact_surface): pairs of primitives closer than the
+  /// contact thickness at the end of the step; Newton steps that continuous collision detection
+  /// shortened (moves it stopped before two parts of the surface met); seconds it took, with the
+  /// joins' update.
+  Index contact_pairs = 0;
+  int contact_limited_steps = 0;
+  double contact_seconds = 0;
 };
 
 /// A point that moves with one tet: sum of weights[k] times node k of tet `tet` (weights sum to 1),
@@ -171,6 +178,16 @@ struct Obstacle {
 /// rest position but belong to different tet copies. Springs between them close the incision.
 std::vector<std::pair<EmbeddedPoint, EmbeddedPoint>> incision_pairs(const MaterialSurface& surface, std::int64_t first_cut,
                                                                     std::int64_t end_cut);
+
+/// Contact of the material surface with itself and between pieces (see set_contact_surface).
+struct SurfaceContactOptions {
+  /// The distance (m) below which two parts of the surface repel, and the gap they keep under
+  /// light load. 0: a tenth of the surface's mean edge length.
+  double thickness = 0;
+  /// kappa (N/m) scaling the barrier. 0: Young's modulus times the surface's mean edge length
+  /// (a pair about as stiff as a cube of the material an edge wide).
+  double stiffness = 0;
+};
 
 struct SimulatorState;
 
@@ -234,6 +251,30 @@ class Simulator {
   /// N/m; by default 10 E h, with h the mean edge length of the mesh the simulator was made with.
   void set_contact_stiffness(double stiffness);
   double contact_stiffness() const;
+  /// Contact of the material surface with itself and between pieces: every vertex-triangle and
+  /// edge-edge pair of the surface (its vertices follow their copies by their weights) closer
+  /// than the thickness adds the barrier kappa b(d), b(d) = -(d - dhat)^2 ln(d / dhat), and every
+  /// Newton step is shortened so that no pair reaches distance 0 (continuous collision detection):
+  /// parts of the surface never pass through each other. Not counted: pairs of copies that are
+  /// neighbours (share a node), and copies a cut has just separated until their surfaces have
+  /// moved apart (see src/sim/surface_contact.hpp for the rule and why it cannot miss a
+  /// collision for long). Give the surface again after every cut (remesh drops it, as it drops
+  /// the contact points). O(F log F) now; each evaluation O(V + pairs near), parallel.
+  /// Error(kInvalidArgument) when the surface names copies or vertices that do not exist.
+  void set_contact_surface(const MaterialSurface& surface, const SurfaceContactOptions& options = {});
+  /// No surface contact (and no memory of the copies a cut joined).
+  void clear_contact_surface();
+  /// What surface contact is working with: the thickness and stiffness in use, the candidate
+  /// pairs of its broad phase, the pairs of copies still joined across a cut, and how often
+  /// the broad phase was rebuilt.
+  struct SurfaceContactState {
+    bool enabled = false;
+    double thickness = 0, stiffness = 0;
+    Index candidates = 0, joined_copy_pairs = 0, rebuilds = 0;
+  };
+  SurfaceContactState surface_contact() const;
+  /// The surface contact energy at the current positions (+inf if two counted parts touch).
+  double surface_contact_energy() const;
   /// A zero-rest-length spring (stiffness / 2) |p - q|^2 between two points, e.g. across an
   /// incision to close it.
   void add_spring(const EmbeddedPoint& p, const EmbeddedPoint& q, double stiffness);

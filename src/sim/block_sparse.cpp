@@ -158,7 +158,8 @@ void BlockSparseMatrix::set_zero() {
 void BlockSparseMatrix::add_scaled(const BlockSparseMatrix& other, double weight) {
   const auto scaled = [weight](auto& to, const auto& from) {
     using Value = typename std::decay_t<decltype(to)>::value_type;
-    for (std::size_t k = 0; k < to.size(); ++k) to[k] = static_cast<Value>(to[k] + weight * from[k]);
+    // Blocks added to this one since the copy (surface contact) are beyond the other's: zeros there.
+    for (std::size_t k = 0; k < std::min(to.size(), from.size()); ++k) to[k] = static_cast<Value>(to[k] + weight * from[k]);
   };
   scaled(values_, other.values_);
   scaled(added_values_, other.added_values_);

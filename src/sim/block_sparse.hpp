@@ -127,7 +127,8 @@ class BlockSparseMatrix {
     return single_ ? static_cast<const void*>(self->f_values(slot)) : static_cast<const void*>(self->d_values(slot));
   }
   void set_zero();
-  /// this += weight * other, for a matrix with the same pattern and precision (a copy of this one).
+  /// this += weight * other, for a matrix with the same pattern and precision (a copy of this
+  /// one, to which blocks may have been added since: the other holds zeros there).
   void add_scaled(const BlockSparseMatrix& other, double weight);
 
   /// y = A x restricted to the nodes with free[n] != 0 (y is 0 at the others, and x is read as 0

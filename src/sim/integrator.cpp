@@ -77,14 +77,15 @@ struct Potential {
     });
   }
 
-  // A constraint term (c c^T times d2E) added into the matrix with `sign`.
+  // A constraint term (c c^T times d2E) added into the matrix with `sign`; a surface contact
+  // pair couples nodes no element does, whose blocks are added to the pattern here.
   void add_term(const SimulatorState::ConstraintTerm& t, double sign) const {
     double m[9];
     for (int i = 0; i < 3; ++i) {
       for (int j = 0; j < 3; ++j) m[3 * i + j] = t.d2E(i, j);
     }
     for (int a = 0; a < t.count; ++a) {
-      for (int b = 0; b < t.count; ++b) s.hessian.add(s.hessian.slot(t.nodes[a], t.nodes[b]), m, sign * t.coefficients[a] * t.coefficients[b]);
+      for (int b = 0; b < t.count; ++b) s.hessian.add(s.hessian.find_or_add(t.nodes[a], t.nodes[b]), m, sign * t.coefficients[a] * t.coefficients[b]);
     }
   }
 
@@ -93,7 +94,7 @@ struct Potential {
   double constraints(const Points& at, std::vector<double>* g, bool hessian) const {
     double energy = 0;
     if (hessian) s.ledger_constraints.clear();
-    s.for_each_constraint(at, [&](const std::array<Index, 8>& nodes, const std::array<double, 8>& c, int count, double e,
+    s.for_each_constraint(at, [&](const std::array<Index, 16>& nodes, const std::array<double, 16>& c, int count, double e,
                                   const Vec3& dE, const Mat3& d2E) {
       energy += e;
       for (int a = 0; a < count; ++a) {
@@ -117,7 +118,7 @@ struct Potential {
     }
     for (const SimulatorState::ConstraintTerm& t : s.ledger_constraints) add_term(t, -1);
     s.ledger_constraints.clear();
-    s.for_each_constraint(at, [&](const std::array<Index, 8>& nodes, const std::array<double, 8>& c, int count, double, const Vec3&,
+    s.for_each_constraint(at, [&](const std::array<Index, 16>& nodes, const std::array<double, 16>& c, int count, double, const Vec3&,
                                   const Mat3& d2E) {
       s.ledger_constraints.push_back({nodes, c, count, d2E});
       add_term(s.ledger_constraints.back(), 1);
@@ -241,6 +242,20 @@ StepReport Simulator::minimise(const StepOptions& options, bool inertia) {
   for (Index v = 0; v < n; ++v) {
     if (s.constraint[v] >= 0) x.row(v) = s.target.row(v);
   }
+  StepReport report;
+  // With surface contact the start is where no two parts of the surface touch; the first guess
+  // may not go beyond where two would meet (the kinematic nodes then go only part of the way
+  // this step).
+  if (s.surface_contact.enabled()) {
+    const Clock::time_point contact_start = Clock::now();
+    s.displacement = x - s.start;
+    const double t = s.surface_contact.max_step(s.start, s.displacement.data());
+    if (t < 1) {
+      x = s.start + t * s.displacement;
+      ++report.contact_limited_steps;
+    }
+    report.contact_seconds += seconds_since(contact_start);
+  }
   Potential potential{s, inertia, h, options.gravity, inertia ? 1 / (h * h) + s.material.mass_damping / h : 0.0, 0.0, false};
   s.current_gradient.assign(size, 0.0);
   s.trial_gradient.assign(size, 0.0);
@@ -276,7 +291,6 @@ StepReport Simulator::minimise(const StepOptions& options, bool inertia) {
     for (std::size_t k = 0; k < size; ++k) sum += s.free[k / 3] ? g[k] * g[k] : 0.0;
     return sum;
   };
-  StepReport report;
   if (options.reuse_hessian < 1) throw Error(ErrorKind::kInvalidArgument, "reuse_hessian must be at least 1");
   // The first iteration may take the matrix of an earlier step (reuse_hessian), brought up to
   // date: a cut's elements, the mass, contact and spring terms of now.
@@ -340,9 +354,16 @@ StepReport Simulator::minimise(const StepOptions& options, bool inertia) {
       report.converged = true;
       break;
     }
-    // Backtracking (Armijo) on the potential.
-    const Clock::time_point search_start = Clock::now();
+    // Backtracking (Armijo) on the potential, from the longest step that keeps the surface's
+    // parts apart.
     double t = 1;
+    if (s.surface_contact.enabled()) {
+      const Clock::time_point contact_start = Clock::now();
+      t = s.surface_contact.max_step(x, s.direction.data());
+      if (t < 1) ++report.contact_limited_steps;
+      report.contact_seconds += seconds_since(contact_start);
+    }
+    const Clock::time_point search_start = Clock::now();
     bool accepted = false;
     for (int halving = 0; halving < kMaxHalvings; ++halving) {
       s.trial = x;
@@ -384,6 +405,12 @@ StepReport Simulator::minimise(const StepOptions& options, bool inertia) {
   }
   report.energy = energy;
   report.residual = std::sqrt(std::max(left, 0.0) / scale);
+  if (s.surface_contact.enabled()) {
+    const Clock::time_point contact_start = Clock::now();
+    s.surface_contact.update_joins(x);
+    s.surface_contact.for_each_active(x, [&](const detail::ContactTerm&, double, const Vec3&, const Mat3&) { ++report.contact_pairs; });
+    report.contact_seconds += seconds_since(contact_start);
+  }
   if (inertia) s.v = (x - s.start) / h;
   return report;
 }

@@ -150,6 +150,65 @@ void Simulator::set_contact_stiffness(double stiffness) {
 }
 double Simulator::contact_stiffness() const { return state_->contact_stiffness; }
 
+void Simulator::set_contact_surface(const MaterialSurface& surface, const SurfaceContactOptions& options) {
+  SimulatorState& s = *state_;
+  const TriangleSurface& t = surface.surface;
+  const Index V = t.num_vertices(), F = t.num_triangles();
+  if (static_cast<Index>(surface.vertex_tet.size()) != V || surface.vertex_weights.rows() != V ||
+      static_cast<Index>(surface.triangle_tet.size()) != F) {
+    throw Error(ErrorKind::kInvalidArgument, "contact surface: per-vertex or per-triangle data of the wrong size");
+  }
+  for (const Index copy : surface.vertex_tet) {
+    if (copy < 0 || copy >= num_tets()) throw Error(ErrorKind::kInvalidArgument, "contact surface: a vertex names tet " + std::to_string(copy) + " of " + std::to_string(num_tets()));
+  }
+  for (const Index copy : surface.triangle_tet) {
+    if (copy < 0 || copy >= num_tets()) throw Error(ErrorKind::kInvalidArgument, "contact surface: a triangle names tet " + std::to_string(copy) + " of " + std::to_string(num_tets()));
+  }
+  for (Index f = 0; f < F; ++f) {
+    for (int k = 0; k < 3; ++k) {
+      if (t.triangles(f, k) < 0 || t.triangles(f, k) >= V) throw Error(ErrorKind::kInvalidArgument, "contact surface: triangle " + std::to_string(f) + " names a vertex that does not exist");
+    }
+  }
+  if (!surface.vertex_weights.allFinite() || !t.vertices.allFinite()) throw Error(ErrorKind::kInvalidArgument, "contact surface: not finite");
+  if (!(options.thickness >= 0) || !(options.stiffness >= 0) || !std::isfinite(options.thickness) || !std::isfinite(options.stiffness)) {
+    throw Error(ErrorKind::kInvalidArgument, "contact surface: thickness and stiffness must not be negative");
+  }
+  std::vector<std::array<Index, 4>> copy_nodes(s.elements.size());
+  for (std::size_t e = 0; e < s.elements.size(); ++e) copy_nodes[e] = s.elements[e].nodes;
+  if (s.contact_changed.size() != s.elements.size()) s.contact_changed.assign(s.elements.size(), 1);
+  s.surface_contact_options = options;
+  // The defaults follow the surface (its mean edge length): a first pass without settings finds it.
+  s.surface_contact.set_settings({});
+  s.surface_contact.set_surface(surface, copy_nodes, s.x, s.contact_changed);
+  const double edge = s.surface_contact.mean_edge_length();
+  detail::SurfaceContact::Settings settings;
+  settings.thickness = options.thickness > 0 ? options.thickness : 0.1 * edge;
+  settings.stiffness = options.stiffness > 0 ? options.stiffness : s.material.youngs_modulus * edge;
+  s.surface_contact.set_settings(settings);
+  s.surface_contact.set_surface(surface, copy_nodes, s.x, s.contact_changed);
+  std::fill(s.contact_changed.begin(), s.contact_changed.end(), 0);
+}
+
+void Simulator::clear_contact_surface() { state_->surface_contact.reset(); }
+
+Simulator::SurfaceContactState Simulator::surface_contact() const {
+  const detail::SurfaceContact& c = state_->surface_contact;
+  SurfaceContactState out;
+  out.enabled = c.enabled();
+  out.thickness = c.settings().thickness;
+  out.stiffness = c.settings().stiffness;
+  out.candidates = c.num_candidates();
+  out.joined_copy_pairs = c.num_joins();
+  out.rebuilds = c.num_rebuilds();
+  return out;
+}
+
+double Simulator::surface_contact_energy() const {
+  double energy = 0;
+  state_->surface_contact.for_each_active(state_->x, [&](const detail::ContactTerm&, double e, const Vec3&, const Mat3&) { energy += e; });
+  return energy;
+}
+
 void Simulator::add_spring(const EmbeddedPoint& p, const EmbeddedPoint& q, double stiffness) {
   SimulatorState& s = *state_;
   for (const EmbeddedPoint* e : {&p, &q}) {
@@ -204,8 +263,10 @@ void SimulatorState::carry_new_nodes(Index first_new_node, std::span<const Index
     assembled_at.conservativeResize(total, 3);
     for (Index i = 0; i < static_cast<Index>(new_node_source.size()); ++i) assembled_at.row(first_new_node + i) = assembled_at.row(new_node_source[i]);
   }
-  // Springs, anchors and contact points name tets and barycentric weights that a cut may change.
+  // Springs, anchors, contact points and the contact surface name tets and barycentric weights
+  // that a cut may change (the surface contact keeps its joins of copies: their ids stay).
   contact_points.clear();
+  surface_contact.clear_surface();
   springs.clear();
   anchors.clear();
 }
@@ -222,6 +283,7 @@ void Simulator::remesh(const TetMesh& mesh, std::span<const double> volume_fract
   }
   s.carry_new_nodes(first_new_node, new_node_source);
   s.build(mesh, volume_fraction);
+  s.contact_changed.assign(static_cast<std::size_t>(mesh.num_tets()), 1);
 }
 
 void Simulator::remesh(const Cutter& cutter, const CutBatchReport& batch) {
@@ -257,6 +319,8 @@ void Simulator::remesh(const Cutter& cutter, const CutBatchReport& batch) {
   }
   std::sort(rebuilt.begin(), rebuilt.end());
   rebuilt.erase(std::unique(rebuilt.begin(), rebuilt.end()), rebuilt.end());
+  s.contact_changed.resize(s.elements.size(), 1);  // new copies
+  for (const Index copy : rebuilt) s.contact_changed[static_cast<std::size_t>(copy)] = 1;
   s.compute_masses();
   s.update_after_cut(old_tets, batch.new_tet_source, batch.changed_tets, rebuilt);
 }

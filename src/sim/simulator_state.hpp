@@ -6,6 +6,7 @@
 #include "sim/block_sparse.hpp"
 #include "sim/elasticity.hpp"
 #include "sim/element_batch.hpp"
+#include "sim/surface_contact.hpp"
 
 #include <tetcut/sim.hpp>
 
@@ -35,6 +36,12 @@ struct SimulatorState {
   bool contact_stiffness_given = false;
   std::vector<Spring> springs;
   std::vector<Simulator::Anchor> anchors;
+  // Contact of the material surface with itself (set_contact_surface): mutable, as its candidate
+  // list is a cache of the positions it was last asked about. `contact_changed`: per copy,
+  // whether a cut changed it since the surface was last set.
+  mutable detail::SurfaceContact surface_contact;
+  SurfaceContactOptions surface_contact_options;
+  std::vector<std::uint8_t> contact_changed;
   Points x, v;
   Eigen::VectorXd mass;
   double size = 1;
@@ -81,8 +88,8 @@ struct SimulatorState {
   // own in. A cut since then leaves element contributions to take out (the old element, its
   // slots and warm start) and to put in (positions), both at assembled_at.
   struct ConstraintTerm {
-    std::array<Index, 8> nodes;
-    std::array<double, 8> coefficients;
+    std::array<Index, 16> nodes;
+    std::array<double, 16> coefficients;
     int count;
     Mat3 d2E;
   };
@@ -162,7 +169,8 @@ struct SimulatorState {
   /// updates the elements' SVD warm starts. Needs a fresh structure (refresh_structure).
   double assemble_hessian(const Points& at, std::vector<double>* gradient);
 
-  /// The soft constraints as energies of one point y = sum_i c_i x_{n_i} (up to 8 nodes); calls
+  /// The soft constraints as energies of one point y = sum_i c_i x_{n_i} (up to 16 nodes: a
+  /// surface contact pair's y is the vector between its closest points); calls
   /// visit(nodes, coefficients, count, energy, dE/dy, d2E/dy2) for each active one at `at`.
   template <typename Visit>
   void for_each_constraint(const Points& at, Visit&& visit) const;
@@ -170,8 +178,8 @@ struct SimulatorState {
 
 template <typename Visit>
 void SimulatorState::for_each_constraint(const Points& at, Visit&& visit) const {
-  std::array<Index, 8> nodes{};
-  std::array<double, 8> coefficients{};
+  std::array<Index, 16> nodes{};
+  std::array<double, 16> coefficients{};
   for (const EmbeddedPoint& point : contact_points) {
     Vec3 y = Vec3::Zero();
     for (int k = 0; k < 4; ++k) {
@@ -211,6 +219,9 @@ void SimulatorState::for_each_constraint(const Points& at, Visit&& visit) const 
     visit(nodes, coefficients, 8, 0.5 * spring.stiffness * y.squaredNorm(), Vec3(spring.stiffness * y),
           Mat3(spring.stiffness * Mat3::Identity()));
   }
+  surface_contact.for_each_active(at, [&](const detail::ContactTerm& t, double energy, const Vec3& dE, const Mat3& d2E) {
+    visit(t.nodes, t.coefficients, t.count, energy, dE, d2E);
+  });
 }
 
 }  // namespace tetcut::sim

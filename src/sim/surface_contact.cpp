@@ -1,0 +1,392 @@
+// Surface contact (see surface_contact.hpp): the surface taken from a cut, its candidate pairs
+// (a Verlet list over box hierarchies), the barrier's terms, conservative advancement, and the
+// joins of copies a cut has just separated.
+
+#include "sim/surface_contact.hpp"
+
+#include "sim/block_sparse.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace tetcut::sim::detail {
+namespace {
+
+// Conservative advancement stops a pair once it would come closer than this share of the
+// distance it started the move at (Li et al. 2021 use 0.1 too): the line search then starts from a
+// point the barrier can still see, and no pair is ever brought to 0.
+constexpr double kKeepShare = 0.1;
+// Each advance covers this share of the distance left over the motion bound: a margin for the
+// rounding of the distance computed.
+constexpr double kAdvanceShare = 0.9;
+// Conservative advancement gives up refining after this many advances and keeps the safe time
+// reached (a pair sliding along another approaches slowly; the next Newton iteration goes on).
+constexpr int kMaxAdvances = 64;
+
+std::uint64_t copy_pair(Index a, Index b) {
+  const auto lo = static_cast<std::uint64_t>(std::min(a, b)), hi = static_cast<std::uint64_t>(std::max(a, b));
+  return lo << 32 | hi;
+}
+
+spatial::Aabb grown(spatial::Aabb box, double by) {
+  box.min.array() -= by;
+  box.max.array() += by;
+  return box;
+}
+
+}  // namespace
+
+double barrier(double d, double dhat) {
+  if (d >= dhat) return 0;
+  if (!(d > 0)) return std::numeric_limits<double>::infinity();
+  return -(d - dhat) * (d - dhat) * std::log(d / dhat);
+}
+
+double barrier_first(double d, double dhat) {
+  if (d >= dhat || !(d > 0)) return 0;
+  return -2 * (d - dhat) * std::log(d / dhat) - (d - dhat) * (d - dhat) / d;
+}
+
+double barrier_second(double d, double dhat) {
+  if (d >= dhat || !(d > 0)) return 0;
+  const double q = (d - dhat) / d;
+  return -2 * std::log(d / dhat) - 4 * q + q * q;
+}
+
+double pair_energy(const std::array<Vec3, 4>& y, bool edges, double dhat, double kappa, collision::Vec12* gradient,
+                   collision::Mat12* hessian) {
+  const collision::Proximity p = edges ? collision::segment_segment(y[0], y[1], y[2], y[3]) : collision::point_triangle(y[0], y[1], y[2], y[3]);
+  const double d = p.distance;
+  const bool active = d < dhat && d > 0;
+  if (gradient) *gradient = active ? collision::Vec12(kappa * barrier_first(d, dhat) * collision::distance_gradient(p)) : collision::Vec12::Zero();
+  if (hessian) {
+    if (active) {
+      const collision::Vec12 g = collision::distance_gradient(p);
+      *hessian = kappa * (barrier_second(d, dhat) * g * g.transpose() + barrier_first(d, dhat) * collision::distance_hessian(p, y));
+    } else {
+      hessian->setZero();
+    }
+  }
+  return kappa * barrier(d, dhat);
+}
+
+void SurfaceContact::reset() {
+  clear_surface();
+  joins_.clear();
+}
+
+void SurfaceContact::clear_surface() {
+  vertex_nodes_.clear();
+  vertex_weights_.clear();
+  vertex_copy_.clear();
+  triangles_.clear();
+  triangle_copy_.clear();
+  edges_.clear();
+  edge_copy_.clear();
+  copy_nodes_.clear();
+  candidates_.clear();
+  proximities_.clear();
+  rho_ = -1;
+  trees_built_ = false;
+}
+
+bool SurfaceContact::neighbours(Index a, Index b) const {
+  if (a == b) return true;
+  const auto& p = copy_nodes_[static_cast<std::size_t>(a)];
+  const auto& q = copy_nodes_[static_cast<std::size_t>(b)];
+  for (const Index n : p) {
+    if (std::find(q.begin(), q.end(), n) != q.end()) return true;
+  }
+  return false;
+}
+
+void SurfaceContact::set_surface(const MaterialSurface& surface, std::span<const std::array<Index, 4>> copy_nodes, const Points& now,
+                                 std::span<const std::uint8_t> changed) {
+  clear_surface();
+  const TriangleSurface& s = surface.surface;
+  const auto V = static_cast<std::size_t>(s.num_vertices()), F = static_cast<std::size_t>(s.num_triangles());
+  copy_nodes_.assign(copy_nodes.begin(), copy_nodes.end());
+  vertex_nodes_.resize(V);
+  vertex_weights_.resize(V);
+  vertex_copy_.resize(V);
+  for (std::size_t v = 0; v < V; ++v) {
+    vertex_copy_[v] = surface.vertex_tet[v];
+    vertex_nodes_[v] = copy_nodes_[static_cast<std::size_t>(vertex_copy_[v])];
+    vertex_weights_[v] = surface.vertex_weights.row(static_cast<Index>(v)).transpose();
+  }
+  triangles_.resize(F);
+  triangle_copy_.assign(surface.triangle_tet.begin(), surface.triangle_tet.end());
+  // Edges, each once, with the copy of the first triangle that has it.
+  std::vector<std::pair<std::uint64_t, Index>> sides;
+  sides.reserve(3 * F);
+  for (std::size_t t = 0; t < F; ++t) {
+    for (int k = 0; k < 3; ++k) {
+      triangles_[t][k] = s.triangles(static_cast<Index>(t), k);
+      const Index a = s.triangles(static_cast<Index>(t), k), b = s.triangles(static_cast<Index>(t), (k + 1) % 3);
+      sides.emplace_back(copy_pair(a, b), static_cast<Index>(t));
+    }
+  }
+  std::sort(sides.begin(), sides.end());
+  double length = 0;
+  for (std::size_t i = 0; i < sides.size(); ++i) {
+    if (i > 0 && sides[i].first == sides[i - 1].first) continue;
+    const auto a = static_cast<Index>(sides[i].first >> 32), b = static_cast<Index>(sides[i].first & 0xffffffffu);
+    edges_.push_back({a, b});
+    edge_copy_.push_back(triangle_copy_[static_cast<std::size_t>(sides[i].second)]);
+    length += (s.vertices.row(a) - s.vertices.row(b)).norm();
+  }
+  mean_edge_ = edges_.empty() ? 0.0 : length / static_cast<double>(edges_.size());
+  if (!enabled() || !(settings_.thickness > 0)) return;
+
+  // Joins: the old ones of copies this cut left alone, and new ones where a changed copy's
+  // surface touches another's in the material and now.
+  const auto was_changed = [&](Index copy) { return static_cast<std::size_t>(copy) < changed.size() && changed[copy] != 0; };
+  std::erase_if(joins_, [&](std::uint64_t key) {
+    return was_changed(static_cast<Index>(key >> 32)) || was_changed(static_cast<Index>(key & 0xffffffffu));
+  });
+  cover(now, 0);
+  measure();
+  const Points y_rest = s.vertices;
+  const double dhat = settings_.thickness;
+  for (std::size_t k = 0; k < candidates_.size(); ++k) {
+    const Candidate& c = candidates_[k];
+    if (!(proximities_[k].distance < dhat)) continue;
+    if (!was_changed(static_cast<Index>(c.copies >> 32)) && !was_changed(static_cast<Index>(c.copies & 0xffffffffu))) continue;
+    if (proximities_[k].distance > 0 && !(proximity(c, y_rest).distance < dhat)) continue;
+    joins_.push_back(c.copies);
+  }
+  std::sort(joins_.begin(), joins_.end());
+  joins_.erase(std::unique(joins_.begin(), joins_.end()), joins_.end());
+  mark_joined();
+}
+
+void SurfaceContact::place(const Points& at, Points* y) const {
+  const auto V = static_cast<Index>(vertex_nodes_.size());
+  y->resize(V, 3);
+  for_chunks(V, kNodeChunk, [&](Index begin, Index end, Index) {
+    for (Index v = begin; v < end; ++v) {
+      Vec3 p = Vec3::Zero();
+      for (int i = 0; i < 4; ++i) p += vertex_weights_[v][i] * at.row(vertex_nodes_[v][i]).transpose();
+      y->row(v) = p.transpose();
+    }
+  });
+}
+
+std::array<Index, 4> SurfaceContact::corners(const Candidate& c) const {
+  if (c.edges) {
+    const auto& e = edges_[static_cast<std::size_t>(c.a)];
+    const auto& f = edges_[static_cast<std::size_t>(c.b)];
+    return {e[0], e[1], f[0], f[1]};
+  }
+  const auto& t = triangles_[static_cast<std::size_t>(c.b)];
+  return {c.a, t[0], t[1], t[2]};
+}
+
+collision::Proximity SurfaceContact::proximity(const Candidate& c, const Points& y) const {
+  const std::array<Index, 4> k = corners(c);
+  const auto at = [&](int i) -> Vec3 { return y.row(k[i]).transpose(); };
+  return c.edges ? collision::segment_segment(at(0), at(1), at(2), at(3)) : collision::point_triangle(at(0), at(1), at(2), at(3));
+}
+
+ContactTerm SurfaceContact::term(const Candidate& c, const collision::Proximity& p) const {
+  ContactTerm t;
+  t.proximity = p;
+  const std::array<Index, 4> k = corners(c);
+  for (int corner = 0; corner < 4; ++corner) {
+    if (p.w[corner] == 0) continue;
+    const auto v = static_cast<std::size_t>(k[corner]);
+    for (int i = 0; i < 4; ++i) {
+      const double coefficient = p.w[corner] * vertex_weights_[v][i];
+      if (coefficient == 0) continue;
+      const Index node = vertex_nodes_[v][i];
+      int slot = 0;
+      while (slot < t.count && t.nodes[slot] != node) ++slot;
+      if (slot == t.count) {
+        t.nodes[t.count] = node;
+        t.coefficients[t.count++] = 0;
+      }
+      t.coefficients[slot] += coefficient;
+    }
+  }
+  return t;
+}
+
+void SurfaceContact::measure() {
+  proximities_.resize(candidates_.size());
+  for_chunks(static_cast<Index>(candidates_.size()), kNodeChunk, [&](Index begin, Index end, Index) {
+    for (Index k = begin; k < end; ++k) proximities_[k] = proximity(candidates_[k], y_);
+  });
+}
+
+void SurfaceContact::cover(const Points& at, double sweep) {
+  place(at, &y_);
+  const double dhat = settings_.thickness;
+  if (rho_ >= 0 && reference_.rows() == y_.rows()) {
+    const double moved = y_.rows() > 0 ? (y_ - reference_).rowwise().norm().maxCoeff() : 0.0;
+    if (2 * (moved + sweep) + dhat <= rho_) return;
+  }
+  reference_ = y_;
+  // Room for motions of dhat / 2 more before the next rebuild.
+  rebuild(2 * dhat + 2 * sweep);
+}
+
+void SurfaceContact::rebuild(double rho) {
+  rho_ = rho;
+  ++rebuilds_;
+  const Points& y = reference_;
+  std::vector<spatial::Aabb> triangle_boxes(triangles_.size()), edge_boxes(edges_.size());
+  for (std::size_t t = 0; t < triangles_.size(); ++t) {
+    for (const Index v : triangles_[t]) triangle_boxes[t].extend(y.row(v).transpose());
+  }
+  for (std::size_t e = 0; e < edges_.size(); ++e) {
+    for (const Index v : edges_[e]) edge_boxes[e].extend(y.row(v).transpose());
+  }
+  if (!trees_built_) {
+    triangle_tree_ = spatial::BoxTree(triangle_boxes);
+    edge_tree_ = spatial::BoxTree(edge_boxes);
+    trees_built_ = true;
+  } else {
+    triangle_tree_.refit(std::move(triangle_boxes));
+    edge_tree_.refit(std::move(edge_boxes));
+  }
+  // Candidates per fixed chunk of vertices, then of edges, joined in chunk order.
+  const auto V = static_cast<Index>(vertex_nodes_.size()), E = static_cast<Index>(edges_.size());
+  constexpr Index kChunk = 256;
+  const Index vertex_chunks = (V + kChunk - 1) / kChunk, edge_chunks = (E + kChunk - 1) / kChunk;
+  std::vector<std::vector<Candidate>> found(static_cast<std::size_t>(vertex_chunks + edge_chunks));
+  for_chunks(vertex_chunks + edge_chunks, 1, [&](Index chunk, Index, Index) {
+    std::vector<Index> hits;
+    std::vector<Candidate>& out = found[static_cast<std::size_t>(chunk)];
+    const bool edge_chunk = chunk >= vertex_chunks;
+    const Index first = (edge_chunk ? chunk - vertex_chunks : chunk) * kChunk;
+    const Index last = std::min(edge_chunk ? E : V, first + kChunk);
+    for (Index i = first; i < last; ++i) {
+      hits.clear();
+      if (!edge_chunk) {
+        spatial::Aabb box;
+        box.extend(Vec3(y.row(i).transpose()));
+        triangle_tree_.query(grown(box, rho), &hits);
+        for (const Index t : hits) {
+          const auto& tri = triangles_[static_cast<std::size_t>(t)];
+          if (tri[0] == i || tri[1] == i || tri[2] == i) continue;
+          if (neighbours(vertex_copy_[i], triangle_copy_[t])) continue;
+          const Candidate c{i, t, 0, 0, copy_pair(vertex_copy_[i], triangle_copy_[t])};
+          if (proximity(c, y).distance <= rho) out.push_back(c);
+        }
+      } else {
+        spatial::Aabb box;
+        for (const Index v : edges_[static_cast<std::size_t>(i)]) box.extend(Vec3(y.row(v).transpose()));
+        edge_tree_.query(grown(box, rho), &hits);
+        const auto& e = edges_[static_cast<std::size_t>(i)];
+        for (const Index f : hits) {
+          if (f <= i) continue;
+          const auto& g = edges_[static_cast<std::size_t>(f)];
+          if (e[0] == g[0] || e[0] == g[1] || e[1] == g[0] || e[1] == g[1]) continue;
+          if (neighbours(edge_copy_[i], edge_copy_[f])) continue;
+          const Candidate c{i, f, 1, 0, copy_pair(edge_copy_[i], edge_copy_[f])};
+          if (proximity(c, y).distance <= rho) out.push_back(c);
+        }
+      }
+    }
+  });
+  candidates_.clear();
+  for (const auto& chunk : found) candidates_.insert(candidates_.end(), chunk.begin(), chunk.end());
+  mark_joined();
+}
+
+void SurfaceContact::mark_joined() {
+  for (Candidate& c : candidates_) c.joined = std::binary_search(joins_.begin(), joins_.end(), c.copies) ? 1 : 0;
+}
+
+double SurfaceContact::max_step(const Points& from, const double* direction) {
+  if (!enabled()) return 1;
+  // The surface vertices' motion over the whole step.
+  const auto V = static_cast<Index>(vertex_nodes_.size());
+  moved_.resize(V, 3);
+  for_chunks(V, kNodeChunk, [&](Index begin, Index end, Index) {
+    for (Index v = begin; v < end; ++v) {
+      Vec3 d = Vec3::Zero();
+      for (int i = 0; i < 4; ++i) {
+        const double* n = direction + 3 * static_cast<std::size_t>(vertex_nodes_[v][i]);
+        d += vertex_weights_[v][i] * Vec3(n[0], n[1], n[2]);
+      }
+      moved_.row(v) = d.transpose();
+    }
+  });
+  const double sweep = V > 0 ? moved_.rowwise().norm().maxCoeff() : 0.0;
+  if (!(sweep > 0)) return 1;
+  cover(from, sweep);
+  std::vector<double> smallest(static_cast<std::size_t>((static_cast<Index>(candidates_.size()) + kNodeChunk - 1) / kNodeChunk) + 1, 1.0);
+  for_chunks(static_cast<Index>(candidates_.size()), kNodeChunk, [&](Index begin, Index end, Index chunk) {
+    double t_min = 1;
+    for (Index k = begin; k < end; ++k) {
+      const Candidate& c = candidates_[k];
+      if (c.joined) continue;
+      const std::array<Index, 4> corner = corners(c);
+      std::array<Vec3, 4> y, d;
+      Vec3 mean = Vec3::Zero();
+      for (int i = 0; i < 4; ++i) {
+        y[i] = y_.row(corner[i]).transpose();
+        d[i] = moved_.row(corner[i]).transpose();
+        mean += d[i] / 4;
+      }
+      // A bound of how fast the distance can shrink: the motions relative to their mean.
+      double bound_a = 0, bound_b = 0;
+      for (int i = 0; i < 4; ++i) {
+        const double speed = (d[i] - mean).norm();
+        if (c.edges) {
+          (i < 2 ? bound_a : bound_b) = std::max(i < 2 ? bound_a : bound_b, speed);
+        } else if (i == 0) {
+          bound_a = speed;
+        } else {
+          bound_b = std::max(bound_b, speed);
+        }
+      }
+      const double bound = bound_a + bound_b;
+      const auto distance_at = [&](double t) {
+        const auto p = [&](int i) -> Vec3 { return y[i] + t * d[i]; };
+        return (c.edges ? collision::segment_segment(p(0), p(1), p(2), p(3)) : collision::point_triangle(p(0), p(1), p(2), p(3))).distance;
+      };
+      const double start = distance_at(0);
+      if (!(bound > 0) || start - bound > 0) continue;  // cannot come within reach this step
+      if (!(start > 0)) {
+        t_min = 0;
+        continue;
+      }
+      double t = 0, advance = (1 - kKeepShare) * start / bound;
+      for (int i = 0; i < kMaxAdvances; ++i) {
+        const double d_next = distance_at(std::min(1.0, t + advance));
+        if (t > 0 && d_next < kKeepShare * start) break;
+        t += advance;
+        if (t >= 1) {
+          t = 1;
+          break;
+        }
+        advance = kAdvanceShare * d_next / bound;
+      }
+      t_min = std::min(t_min, t);
+    }
+    smallest[static_cast<std::size_t>(chunk)] = t_min;
+  });
+  return *std::min_element(smallest.begin(), smallest.end());
+}
+
+void SurfaceContact::update_joins(const Points& at) {
+  if (!enabled() || joins_.empty()) return;
+  cover(at, 0);
+  measure();
+  std::vector<std::uint8_t> touching(joins_.size(), 0);
+  for (std::size_t k = 0; k < candidates_.size(); ++k) {
+    if (!candidates_[k].joined || !(proximities_[k].distance < settings_.thickness)) continue;
+    touching[static_cast<std::size_t>(std::lower_bound(joins_.begin(), joins_.end(), candidates_[k].copies) - joins_.begin())] = 1;
+  }
+  std::size_t kept = 0;
+  for (std::size_t j = 0; j < joins_.size(); ++j) {
+    if (touching[j]) joins_[kept++] = joins_[j];
+  }
+  if (kept == joins_.size()) return;
+  joins_.resize(kept);
+  mark_joined();
+}
+
+}  // namespace tetcut::sim::detail

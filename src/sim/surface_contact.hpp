@@ -1,0 +1,177 @@
+#pragma once
+// Contact of the material surface with itself and between pieces: the simulator's part of the
+// SSIF07 idea that cut pieces collide through their detailed surface, not their tets.
+//
+// The surface's vertices are embedded points (a tet copy and barycentric weights), so every
+// vertex-triangle and edge-edge pair is a function of at most 16 nodes. Each pair closer than
+// the contact thickness dhat adds kappa b(d), with d the pair's unsigned distance and b the IPC
+// barrier (Li et al. 2020):
+//     b(d) = -(d - dhat)^2 ln(d / dhat)  for 0 < d < dhat,  0 beyond,
+// C2 at dhat and unbounded as d -> 0, so that together with a line search that never lets a
+// pair reach d = 0 (conservative continuous collision detection, ACCD of Li et al. 2021) no two
+// primitives ever pass through each other: not an energy that pushes "usually hard enough", but
+// a guarantee up to the step's accuracy. kappa is in N/m (b is an area).
+//
+// The energy is exact; its gradient too (d's gradient is w r / |r| per corner by the envelope
+// theorem, collision/proximity.hpp). For the Newton matrix each pair gives the positive
+// semi-definite part kappa b''(d) grad d grad d^T of its Hessian: the dropped part,
+// kappa b'(d) d'', is negative semi-definite wherever d is convex in the corners (b' <= 0), so
+// what is kept is a convex model of the energy, as projecting element Hessians is. In node terms
+// a pair is one point y = sum_n alpha_n x_n (r as a combination of the nodes), so it is a soft
+// constraint of the kind the integrator already takes (SimulatorState::for_each_constraint).
+//
+// Which pairs count. Excluded for good: pairs sharing a surface vertex, and pairs whose copies
+// are one copy or share a node (neighbours in the material, within a tet of each other: their
+// surfaces meet by construction). Excluded for a while: pairs of copies "joined across a cut",
+// whose surfaces a cut has just made coincide (both sides of a fresh cut are at distance 0, where
+// the barrier is infinite). When the surface is set after a cut, a pair of copies becomes joined
+// when one of them changed in that cut and some pair of their primitives is within dhat both in
+// rest space and now (or at distance 0 now: touching from the start). The join lasts until no
+// pair of their primitives is within dhat any more (checked after every step); from then on the
+// copies collide like any others. Why this cannot miss a real collision for long: copies are
+// joined only while some of their surfaces are still touching where they were cut apart, and a
+// copy spans one tet, so what goes unseen is confined to the two sides of a cut within a tet of
+// each other, and ends as soon as they have opened there.
+//
+// Broad phase: box hierarchies over the triangles and edges, refitted, queried with boxes grown
+// by the radius rho; the candidates (all pairs within rho at the reference positions) serve
+// every evaluation whose vertices have moved less than (rho - dhat) / 2 from there (a Verlet
+// list), and are rebuilt otherwise. O(F log F + candidates) per rebuild, O(V + candidates) per
+// evaluation, both parallel; results do not depend on the number of threads.
+
+#include <tetcut/cutter.hpp>
+#include <tetcut/sim.hpp>
+
+#include "collision/proximity.hpp"
+#include "spatial/box_tree.hpp"
+
+#include <array>
+#include <limits>
+#include <cstdint>
+#include <span>
+#include <vector>
+
+namespace tetcut::sim::detail {
+
+/// The IPC barrier b(d) and its first two derivatives (0 beyond dhat, +inf at d <= 0).
+double barrier(double d, double dhat);
+double barrier_first(double d, double dhat);
+double barrier_second(double d, double dhat);
+
+/// A pair's energy kappa b(d) at corners y (point and triangle, or two segments when `edges`),
+/// with its exact gradient and Hessian in the 12 corner coordinates when asked (for checks; the
+/// simulator's Newton matrix takes the positive semi-definite part, see above).
+double pair_energy(const std::array<Vec3, 4>& y, bool edges, double dhat, double kappa, collision::Vec12* gradient = nullptr,
+                   collision::Mat12* hessian = nullptr);
+
+/// One pair as a soft constraint: r = sum_i coefficients[i] x_{nodes[i]} (count distinct nodes).
+struct ContactTerm {
+  std::array<Index, 16> nodes;
+  std::array<double, 16> coefficients;
+  int count = 0;
+  collision::Proximity proximity;
+};
+
+class SurfaceContact {
+ public:
+  struct Settings {
+    double thickness = 0;  ///< dhat
+    double stiffness = 0;  ///< kappa
+  };
+
+  bool enabled() const { return !triangles_.empty(); }
+  const Settings& settings() const { return settings_; }
+  void set_settings(const Settings& settings) { settings_ = settings; }
+
+  /// Takes the surface (rest positions, its vertices embedded in the copies with `copy_nodes`)
+  /// with the nodes `now`; `changed`, per copy, whether the cuts since the last surface changed
+  /// it (its joins are recomputed; the others' are kept). O(F log F + candidates).
+  void set_surface(const MaterialSurface& surface, std::span<const std::array<Index, 4>> copy_nodes, const Points& now,
+                   std::span<const std::uint8_t> changed);
+  /// Drops the surface (a cut changes it; set it again), keeping the joins.
+  void clear_surface();
+  /// Forgets everything, joins included.
+  void reset();
+
+  /// Calls visit(term, energy, dE/dr, d2E/dr2) for every pair closer than dhat at node positions
+  /// `at`, in a fixed order. Energy +inf (and zero derivatives) for a pair at distance 0.
+  template <typename Visit>
+  void for_each_active(const Points& at, Visit&& visit);
+
+  /// The largest t in (0, 1] such that moving the nodes from `from` along t * direction (3 per
+  /// node) keeps every counted pair at a positive distance, with a margin: conservative
+  /// advancement stops a pair at a tenth of its starting distance. 1 when nothing comes close.
+  double max_step(const Points& from, const double* direction);
+
+  /// After a step, at its final positions: joins whose copies have no pair within dhat end.
+  void update_joins(const Points& at);
+
+  Index num_candidates() const { return static_cast<Index>(candidates_.size()); }
+  Index num_joins() const { return static_cast<Index>(joins_.size()); }
+  Index num_rebuilds() const { return rebuilds_; }
+  /// Mean edge length of the surface (the defaults are derived from it).
+  double mean_edge_length() const { return mean_edge_; }
+
+ private:
+  struct Candidate {
+    Index a, b;            // vertex and triangle, or two edges
+    std::uint8_t edges;    // 0: vertex-triangle, 1: edge-edge
+    std::uint8_t joined;   // copies joined across a cut (not counted)
+    std::uint64_t copies;  // the copy pair, (min << 32) | max
+  };
+  void place(const Points& at, Points* y) const;
+  /// Makes the candidates cover positions `at` and motions of up to `sweep` from there.
+  void cover(const Points& at, double sweep);
+  void rebuild(double rho);
+  void mark_joined();
+  /// proximities_ of every candidate at y_, in parallel.
+  void measure();
+  collision::Proximity proximity(const Candidate& c, const Points& y) const;
+  std::array<Index, 4> corners(const Candidate& c) const;
+  ContactTerm term(const Candidate& c, const collision::Proximity& p) const;
+  bool neighbours(Index copy_a, Index copy_b) const;
+
+  Settings settings_;
+  // The surface: vertices as nodes and weights, triangles and edges with their copies.
+  std::vector<std::array<Index, 4>> vertex_nodes_;
+  std::vector<Eigen::Vector4d> vertex_weights_;
+  std::vector<Index> vertex_copy_;
+  std::vector<std::array<Index, 3>> triangles_;
+  std::vector<Index> triangle_copy_;
+  std::vector<std::array<Index, 2>> edges_;
+  std::vector<Index> edge_copy_;
+  std::vector<std::array<Index, 4>> copy_nodes_;
+  double mean_edge_ = 0;
+  // Joined copy pairs, sorted.
+  std::vector<std::uint64_t> joins_;
+  // The Verlet list: candidates within rho_ of each other at vertex positions reference_.
+  std::vector<Candidate> candidates_;
+  std::vector<collision::Proximity> proximities_;
+  Points reference_, y_, moved_;
+  double rho_ = -1;
+  spatial::BoxTree triangle_tree_, edge_tree_;
+  bool trees_built_ = false;
+  Index rebuilds_ = 0;
+};
+
+template <typename Visit>
+void SurfaceContact::for_each_active(const Points& at, Visit&& visit) {
+  if (!enabled()) return;
+  cover(at, 0);
+  measure();
+  const double dhat = settings_.thickness, kappa = settings_.stiffness;
+  for (std::size_t k = 0; k < candidates_.size(); ++k) {
+    const collision::Proximity& p = proximities_[k];
+    if (candidates_[k].joined || !(p.distance < dhat)) continue;
+    const ContactTerm t = term(candidates_[k], p);
+    if (!(p.distance > 0)) {
+      visit(t, std::numeric_limits<double>::infinity(), Vec3::Zero().eval(), Mat3::Zero().eval());
+      continue;
+    }
+    const Vec3 n = p.r / p.distance;
+    visit(t, kappa * barrier(p.distance, dhat), Vec3(kappa * barrier_first(p.distance, dhat) * n),
+          Mat3(kappa * barrier_second(p.distance, dhat) * n * n.transpose()));
+  }
+}
+
+}  // namespace tetcut::sim::detail

@@ -1,0 +1,252 @@
+// Contact of the material surface with itself and between pieces: the energy's gradient against
+// finite differences over node positions, two blocks colliding (no interpenetration, momentum
+// kept), two blocks dropped on each other onto the ground (at rest, no interpenetration), and a
+// block cut in two whose halves part and are pushed back together.
+
+#include <gtest/gtest.h>
+
+#include <tetcut/collision.hpp>
+#include <tetcut/cutter.hpp>
+#include <tetcut/generators.hpp>
+#include <tetcut/sim.hpp>
+
+#include "sim/surface_contact.hpp"
+
+#include <random>
+
+namespace tetcut {
+namespace {
+
+// Two grid blocks in one mesh: [0,1]^3, and the same lifted by 1 + gap and shifted a little
+// sideways (so that edges and corners meet faces, not only faces faces).
+TetMesh two_blocks(double gap, Index cells = 3) {
+  const TetMesh a = make_grid({Vec3(0, 0, 0), Vec3(1, 1, 1)}, {cells, cells, cells}, 5);
+  const TetMesh b = make_grid({Vec3(0.05, 0.02, 1 + gap), Vec3(1.05, 1.02, 2 + gap)}, {cells, cells, cells}, 5);
+  Points rest(a.num_nodes() + b.num_nodes(), 3);
+  rest << a.rest(), b.rest();
+  Tets tets(a.num_tets() + b.num_tets(), 4);
+  tets << a.tets(), (b.tets().array() + a.num_nodes()).matrix();
+  return TetMesh(rest, tets);
+}
+
+sim::Material soft() {
+  sim::Material m;
+  m.youngs_modulus = 1e5;
+  m.poissons_ratio = 0.3;
+  m.density = 1000;
+  return m;
+}
+
+Index crossings(const MaterialSurface& surface, const std::vector<std::array<Index, 4>>& copies, const sim::Simulator& sim) {
+  const Points at = surface.positions(copies, sim.positions());
+  const double diagonal = (at.colwise().maxCoeff() - at.colwise().minCoeff()).norm();
+  return count_surface_intersections(surface, copies, at, 1e-6 * diagonal).intersecting_pairs;
+}
+
+std::vector<std::array<Index, 4>> copies_of(const TetMesh& mesh) {
+  std::vector<std::array<Index, 4>> out(static_cast<std::size_t>(mesh.num_tets()));
+  for (Index t = 0; t < mesh.num_tets(); ++t) {
+    for (int k = 0; k < 4; ++k) out[t][k] = mesh.tets()(t, k);
+  }
+  return out;
+}
+
+TEST(SurfaceContact, GradientMatchesFiniteDifferences) {
+  const TetMesh mesh = two_blocks(0.05);
+  Cutter cutter(mesh);
+  const MaterialSurface surface = cutter.surface();
+  const auto copies = copies_of(mesh);
+  // The upper block lowered to within a third of the thickness, and every node jiggled so that
+  // pairs meet in all regions (faces, edges, corners).
+  const double dhat = 0.02;
+  Points x = mesh.rest();
+  std::mt19937 random(3);
+  std::uniform_real_distribution<double> jiggle(-0.003, 0.003);
+  for (Index v = 0; v < x.rows(); ++v) {
+    if (x(v, 2) > 1.01) x(v, 2) -= 0.05 - dhat / 3;
+    for (int k = 0; k < 3; ++k) x(v, k) += jiggle(random);
+  }
+  sim::detail::SurfaceContact contact;
+  contact.set_settings({dhat, 1e3});
+  const std::vector<std::uint8_t> changed(copies.size(), 0);  // nothing was cut: no joins
+  contact.set_surface(surface, copies, x, changed);
+  ASSERT_EQ(contact.num_joins(), 0);
+  const auto energy_and_gradient = [&](const Points& at, std::vector<double>* gradient) {
+    double energy = 0;
+    int pairs = 0;
+    if (gradient) gradient->assign(3 * static_cast<std::size_t>(at.rows()), 0.0);
+    contact.for_each_active(at, [&](const sim::detail::ContactTerm& t, double e, const Vec3& dE, const sim::Mat3&) {
+      energy += e;
+      ++pairs;
+      if (!gradient) return;
+      for (int a = 0; a < t.count; ++a) {
+        for (int i = 0; i < 3; ++i) (*gradient)[3 * t.nodes[a] + i] += t.coefficients[a] * dE[i];
+      }
+    });
+    return std::make_pair(energy, pairs);
+  };
+  std::vector<double> gradient;
+  const auto [energy, pairs] = energy_and_gradient(x, &gradient);
+  ASSERT_GT(pairs, 20);
+  ASSERT_TRUE(std::isfinite(energy));
+  ASSERT_GT(energy, 0);
+  // Every coordinate of the nodes that take part.
+  int checked = 0;
+  const double h = 1e-7;
+  for (Index v = 0; v < x.rows(); ++v) {
+    for (int i = 0; i < 3; ++i) {
+      if (gradient[3 * v + i] == 0) continue;
+      Points plus = x, minus = x;
+      plus(v, i) += h;
+      minus(v, i) -= h;
+      const double numeric = (energy_and_gradient(plus, nullptr).first - energy_and_gradient(minus, nullptr).first) / (2 * h);
+      EXPECT_NEAR(gradient[3 * v + i], numeric, 1e-5 * std::abs(numeric) + 1e-6) << v << " " << i;
+      ++checked;
+    }
+  }
+  EXPECT_GT(checked, 30);
+  // Translation invariance: the forces on the two blocks cancel.
+  Vec3 total = Vec3::Zero();
+  for (Index v = 0; v < x.rows(); ++v) total += Vec3(gradient[3 * v], gradient[3 * v + 1], gradient[3 * v + 2]);
+  EXPECT_LT(total.norm(), 1e-9 * (1 + std::abs(energy)));
+}
+
+TEST(SurfaceContact, CollidingBlocksDoNotInterpenetrateAndKeepTheirMomentum) {
+  const TetMesh mesh = two_blocks(0.05);
+  Cutter cutter(mesh);
+  const MaterialSurface surface = cutter.surface();
+  const auto copies = copies_of(mesh);
+  sim::Simulator sim(mesh, soft());
+  sim.set_contact_surface(surface);
+  const sim::Simulator::SurfaceContactState state = sim.surface_contact();
+  ASSERT_TRUE(state.enabled);
+  EXPECT_EQ(state.joined_copy_pairs, 0);
+  // The upper block flies down onto the lower one at 8 m/s, without gravity: the first step
+  // would take it past the gap.
+  Points v = Points::Zero(sim.num_nodes(), 3);
+  for (Index n = 0; n < v.rows(); ++n) {
+    if (mesh.rest()(n, 2) > 1.01) v(n, 2) = -8;
+  }
+  sim.set_velocities(v);
+  const Vec3 momentum = sim.momentum();
+  sim::StepOptions options;
+  options.dt = 0.01;
+  options.gravity = Vec3::Zero();
+  int touching_steps = 0, limited = 0;
+  for (int step = 0; step < 40; ++step) {
+    const sim::StepReport report = sim.step(options);
+    touching_steps += report.contact_pairs > 0;
+    limited += report.contact_limited_steps;
+    ASSERT_EQ(crossings(surface, copies, sim), 0) << "step " << step;
+  }
+  EXPECT_GT(touching_steps, 2);
+  EXPECT_GT(limited, 0);  // the fast block had to be stopped short of the other at first
+  // Contact forces are internal: the momentum stays (to the solver's tolerance), and has passed
+  // in part to the lower block.
+  EXPECT_LT((sim.momentum() - momentum).norm(), 1e-3 * momentum.norm());
+  Vec3 lower = Vec3::Zero();
+  for (Index n = 0; n < sim.num_nodes(); ++n) {
+    if (mesh.rest()(n, 2) <= 1.01) lower += sim.masses()[n] * sim.velocities().row(n).transpose();
+  }
+  EXPECT_LT(lower.z(), 0.2 * momentum.z());
+  // The blocks never came closer than zero; now they are not inside each other either.
+  double lowest_upper = std::numeric_limits<double>::infinity(), highest_lower = -lowest_upper;
+  const Points at = surface.positions(copies, sim.positions());
+  for (Index n = 0; n < at.rows(); ++n) {
+    const bool upper = surface.surface.vertices(n, 2) > 1.01;
+    if (upper) {
+      lowest_upper = std::min(lowest_upper, at(n, 2));
+    } else {
+      highest_lower = std::max(highest_lower, at(n, 2));
+    }
+  }
+  EXPECT_GT(lowest_upper, highest_lower - 0.05);  // the top faces may bulge, but not pass through
+}
+
+TEST(SurfaceContact, BlocksDroppedOnEachOtherComeToRest) {
+  const TetMesh mesh = two_blocks(0.1);
+  Cutter cutter(mesh);
+  const MaterialSurface surface = cutter.surface();
+  const auto copies = copies_of(mesh);
+  sim::Material material = soft();
+  material.youngs_modulus = 1e6;
+  material.mass_damping = 4;
+  sim::Simulator sim(mesh, material);
+  sim.set_contact_surface(surface);
+  // Both fall onto the ground 0.1 below the lower one.
+  std::vector<sim::EmbeddedPoint> points;
+  for (Index n = 0; n < surface.surface.num_vertices(); ++n) points.push_back({surface.vertex_tet[n], surface.vertex_weights.row(n).transpose()});
+  sim.set_contact_points(points);
+  sim.add_obstacle(sim::Obstacle::plane(Vec3(0, 0, -0.1), Vec3(0, 0, 1)));
+  sim::StepOptions options;
+  options.dt = 0.01;
+  for (int step = 0; step < 150; ++step) {
+    sim.step(options);
+    ASSERT_EQ(crossings(surface, copies, sim), 0) << "step " << step;
+  }
+  EXPECT_LT(sim.velocities().rowwise().norm().maxCoeff(), 0.05);
+  // The upper block rests on the lower one, which rests on the ground.
+  const Points at = surface.positions(copies, sim.positions());
+  double upper_bottom = std::numeric_limits<double>::infinity(), lower_bottom = upper_bottom;
+  for (Index n = 0; n < at.rows(); ++n) {
+    double& bottom = surface.surface.vertices(n, 2) > 1.01 ? upper_bottom : lower_bottom;
+    bottom = std::min(bottom, at(n, 2));
+  }
+  EXPECT_NEAR(lower_bottom, -0.1, 0.01);
+  // On top of the lower block (its top, squeezed by the weight, near 0.89), within the contact
+  // thickness.
+  EXPECT_GT(upper_bottom, 0.88);
+  EXPECT_LT(upper_bottom, 0.89 + sim.surface_contact().thickness);
+}
+
+TEST(SurfaceContact, HalvesOfACutBlockPartAndMeetAgainWithoutCrossing) {
+  const TetMesh mesh = make_grid({Vec3(0, 0, 0), Vec3(1, 1, 1)}, {4, 4, 4}, 5);
+  Cutter cutter(mesh);
+  // A plane x = 0.43 through the whole block.
+  TriangleSurface blade;
+  blade.vertices.resize(4, 3);
+  blade.vertices << 0.43, -1, -1, 0.43, 2, -1, 0.43, 2, 2, 0.43, -1, 2;
+  blade.triangles.resize(2, 3);
+  blade.triangles << 0, 1, 2, 0, 2, 3;
+  cutter.cut(blade);
+  const CutResult result = cutter.result();
+  ASSERT_EQ(result.mesh.num_pieces(), 2);
+  const MaterialSurface& surface = result.surface;
+  const auto copies = copies_of(result.mesh.mesh);
+  sim::Simulator sim(result.mesh.mesh, soft(), result.mesh.material_fractions());
+  sim.set_contact_surface(surface);
+  EXPECT_GT(sim.surface_contact().joined_copy_pairs, 0);  // the fresh cut's two sides touch
+  EXPECT_EQ(sim.surface_contact_energy(), 0);              // and do not push each other
+  // The halves part at 0.5 m/s each, then are thrown back together at 2 m/s each.
+  const auto set_speed = [&](double speed) {
+    Points v = Points::Zero(sim.num_nodes(), 3);
+    for (Index t = 0; t < result.mesh.mesh.num_tets(); ++t) {
+      const double side = result.mesh.tet_piece[t] == result.mesh.tet_piece[0] ? -1 : 1;
+      for (int k = 0; k < 4; ++k) v(result.mesh.mesh.tets()(t, k), 0) = side * speed;
+    }
+    sim.set_velocities(v);
+  };
+  // Which side piece 0 is on decides the sign; find it from a copy's centroid.
+  double x0 = 0;
+  for (int k = 0; k < 4; ++k) x0 += result.mesh.mesh.rest()(result.mesh.mesh.tets()(0, k), 0) / 4;
+  const double away = x0 < 0.43 ? 1 : -1;
+  set_speed(0.5 * away);
+  sim::StepOptions options;
+  options.dt = 0.01;
+  options.gravity = Vec3::Zero();
+  for (int step = 0; step < 10; ++step) {
+    sim.step(options);
+    ASSERT_EQ(crossings(surface, copies, sim), 0) << "parting, step " << step;
+  }
+  EXPECT_EQ(sim.surface_contact().joined_copy_pairs, 0);  // opened: from now on they collide
+  set_speed(-2 * away);
+  int touching = 0;
+  for (int step = 0; step < 40; ++step) {
+    touching += sim.step(options).contact_pairs > 0;
+    ASSERT_EQ(crossings(surface, copies, sim), 0) << "meeting, step " << step;
+  }
+  EXPECT_GT(touching, 0);
+}
+
+}  // namespace
+}  // namespace tetcut
