@@ -1,7 +1,7 @@
 #pragma once
 // Whether the material surface passes through itself: exact triangle-triangle tests between parts
 // of the surface of different tet copies (what `tetcut sim --check-intersections` reports per
-// frame). A measure, not a response: contact between pieces is not simulated yet.
+// frame). A measure; the response is the simulator's surface contact (Simulator::set_contact_surface).
 
 #include <tetcut/cutter.hpp>
 
@@ -34,7 +34,8 @@ struct SurfaceIntersections {
 ///   rounded, show as crossings. So crossings between parts of one piece less than about a tet
 ///   apart in the material are not seen; lips of an incision are, except within a tet of its end;
 /// - pairs that share a point across a cut not yet opened there: two vertices with the same rest
-///   position (exactly) that are still within `opened` of each other now (at least the rounding
+///   position (up to its rounding, 64 ulps of the largest rest coordinate: copies may round one
+///   exact point differently) that are still within `opened` of each other now (at least the rounding
 ///   of placing a vertex by its copy's weights, 64 ulps of the largest coordinate; a simulation
 ///   passes its solver's noise, since the two sides of a cut, free to drift, wander around each
 ///   other by about its tolerance before anything opens them); and pairs on the two
