@@ -25,6 +25,9 @@
 //     "obstacles": [{"plane": {"point", "normal"}} | {"sphere": {"centre", "radius"}}
 //                   | {"box": {"min", "max"}}],
 //     "contact_stiffness": K
+//     "self_collision": true | false | {"thickness": m, "stiffness": N/m}   contact of the material
+//                   surface with itself and between pieces (Simulator::set_contact_surface); off
+//                   by default (see the README for its cost)
 //     "cuts":      [{"time", "space": "rest"|"world", and one of
 //                    "triangles": PATH | "plane": {"centre", "normal", "size"}
 //                    | "cylinder": {"centre", "axis", "radius", "length", "segments"}
@@ -123,6 +126,9 @@ struct Scene {
   std::vector<SceneMove> moves;
   std::vector<sim::Obstacle> obstacles;
   double contact_stiffness = 0;  ///< 0: the simulator's default
+  /// Contact of the material surface with itself and between pieces (Simulator::set_contact_surface).
+  bool self_collision = false;
+  sim::SurfaceContactOptions self_contact;  ///< zeros: the simulator's defaults
   std::vector<SceneCut> cuts;    ///< sorted by time
   std::vector<SceneScalpel> scalpels;
   std::vector<SceneTransform> transforms;
@@ -187,6 +193,11 @@ struct SceneSummary {
   /// surface triangles of different copies, and the largest count (empty and 0 otherwise).
   std::vector<Index> intersecting_pairs;
   Index max_intersecting_pairs = 0;
+  /// With Scene::self_collision: the most surface pairs in contact at the end of a step, the
+  /// Newton steps continuous collision detection shortened, and its seconds (in the step stage).
+  Index max_contact_pairs = 0;
+  Index contact_limited_steps = 0;
+  double contact_seconds = 0;
 };
 
 /// Runs the scene, writing into `directory`: mesh_NNNN.vtu (the simulation mesh, piece and

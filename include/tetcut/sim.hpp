@@ -256,8 +256,10 @@ class Simulator {
   /// than the thickness adds the barrier kappa b(d), b(d) = -(d - dhat)^2 ln(d / dhat), and every
   /// Newton step is shortened so that no pair reaches distance 0 (continuous collision detection):
   /// parts of the surface never pass through each other. Not counted: pairs of copies that are
-  /// neighbours (share a node), and copies a cut has just separated until their surfaces have
-  /// moved apart (see src/sim/surface_contact.hpp for the rule and why it cannot miss a
+  /// neighbours (share a node), copies a cut has just separated until their surfaces have moved
+  /// apart, and, while springs (add_spring) suture an incision, pairs between the copies they
+  /// hold that were within the thickness of each other in the material (the springs pull them
+  /// back together) (see src/sim/surface_contact.hpp for the rule and why it cannot miss a
   /// collision for long). Give the surface again after every cut (remesh drops it, as it drops
   /// the contact points). O(F log F) now; each evaluation O(V + pairs near), parallel.
   /// Error(kInvalidArgument) when the surface names copies or vertices that do not exist.

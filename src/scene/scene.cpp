@@ -51,6 +51,7 @@ class Value {
     }
   }
   bool has(const char* key) const { return json_->is_object() && json_->contains(key); }
+  bool is_object() const { return json_->is_object(); }
   Value at(const char* key) const {
     if (!has(key)) fail(std::string("missing key '") + key + "'");
     return Value((*json_)[key], join(key), file_);
@@ -308,7 +309,7 @@ Scene parse_scene(std::string_view text, const std::filesystem::path& path) {
   const std::string file = path.string();
   const Value root(json, "", &file);
   root.allow({"mesh", "embed", "material", "gravity", "time", "solver", "pin", "move", "obstacles", "contact_stiffness",
-              "cuts", "scalpels", "transforms", "springs", "events", "output"});
+              "self_collision", "cuts", "scalpels", "transforms", "springs", "events", "output"});
   Scene scene;
   scene.source = path;
   scene.json = json.dump();
@@ -411,6 +412,17 @@ Scene parse_scene(std::string_view text, const std::filesystem::path& path) {
     }
   }
   if (const auto k = root.get("contact_stiffness")) scene.contact_stiffness = k->positive();
+  if (const auto self = root.get("self_collision")) {
+    // true | false | {"thickness": m, "stiffness": N/m} (either may be left to its default).
+    if (self->is_object()) {
+      self->allow({"thickness", "stiffness"});
+      scene.self_collision = true;
+      if (const auto t = self->get("thickness")) scene.self_contact.thickness = t->positive();
+      if (const auto k = self->get("stiffness")) scene.self_contact.stiffness = k->positive();
+    } else {
+      scene.self_collision = self->boolean();
+    }
+  }
   if (const auto cuts = root.get("cuts")) {
     for (const Value& cut : cuts->array()) scene.cuts.push_back(load_cut(cut, path));
     std::stable_sort(scene.cuts.begin(), scene.cuts.end(), [](const SceneCut& a, const SceneCut& b) { return a.time < b.time; });
@@ -540,6 +552,9 @@ class SceneRunner {
       cg_total += step.report.cg_iterations;
       summary_.max_residual = std::max(summary_.max_residual, step.report.residual);
       summary_.unconverged_steps += step.report.converged ? 0 : 1;
+      summary_.max_contact_pairs = std::max(summary_.max_contact_pairs, step.report.contact_pairs);
+      summary_.contact_limited_steps += step.report.contact_limited_steps;
+      summary_.contact_seconds += step.report.contact_seconds;
       ++summary_.steps;
       if ((s + 1) % every == 0) {
         write_frame((s + 1) * dt);
@@ -646,6 +661,11 @@ class SceneRunner {
                     {"spring_gap_when_attached", s.spring_gap_when_attached},
                     {"spring_gap_final", s.spring_gap_final}};
     Json out = json;
+    if (scene_.self_collision) {
+      out["self_collision"] = {{"max_contact_pairs", s.max_contact_pairs},
+                               {"limited_newton_steps", s.contact_limited_steps},
+                               {"ccd_ms_per_step", s.contact_seconds * per_step}};
+    }
     if (options_.check_intersections) {
       out["intersecting_pairs"] = s.intersecting_pairs;
       out["max_intersecting_pairs"] = s.max_intersecting_pairs;

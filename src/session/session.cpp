@@ -254,6 +254,7 @@ struct Session::State {
       for (Index v = 0; v < s.surface.num_vertices(); ++v) points.push_back({s.vertex_tet[v], s.vertex_weights.row(v).transpose()});
       sim.set_contact_points(std::move(points));
     }
+    if (scene.self_collision) sim.set_contact_surface(current_surface(), scene.self_contact);
     sim.clear_springs();
     spring_ends.clear();
     for (const SceneSprings* springs : active_springs) {

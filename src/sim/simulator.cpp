@@ -216,9 +216,13 @@ void Simulator::add_spring(const EmbeddedPoint& p, const EmbeddedPoint& q, doubl
   }
   if (!(stiffness >= 0) || !std::isfinite(stiffness)) throw Error(ErrorKind::kInvalidArgument, "spring: stiffness must not be negative");
   s.springs.push_back({p, q, stiffness});
+  s.surface_contact.suture(p.tet, q.tet);
   s.springs_pending = true;  // the pattern must hold the blocks between the two tets' nodes
 }
-void Simulator::clear_springs() { state_->springs.clear(); }
+void Simulator::clear_springs() {
+  state_->springs.clear();
+  state_->surface_contact.clear_sutures();
+}
 
 void Simulator::set_anchors(std::vector<Anchor> anchors) {
   for (const Anchor& a : anchors) {
@@ -267,6 +271,7 @@ void SimulatorState::carry_new_nodes(Index first_new_node, std::span<const Index
   // that a cut may change (the surface contact keeps its joins of copies: their ids stay).
   contact_points.clear();
   surface_contact.clear_surface();
+  surface_contact.clear_sutures();
   springs.clear();
   anchors.clear();
 }

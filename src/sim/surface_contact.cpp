@@ -73,6 +73,7 @@ double pair_energy(const std::array<Vec3, 4>& y, bool edges, double dhat, double
 void SurfaceContact::reset() {
   clear_surface();
   joins_.clear();
+  sutured_.clear();
 }
 
 void SurfaceContact::clear_surface() {
@@ -136,6 +137,7 @@ void SurfaceContact::set_surface(const MaterialSurface& surface, std::span<const
     length += (s.vertices.row(a) - s.vertices.row(b)).norm();
   }
   mean_edge_ = edges_.empty() ? 0.0 : length / static_cast<double>(edges_.size());
+  rest_y_ = s.vertices;
   if (!enabled() || !(settings_.thickness > 0)) return;
 
   // Joins: the old ones of copies this cut left alone, and new ones where a changed copy's
@@ -146,7 +148,7 @@ void SurfaceContact::set_surface(const MaterialSurface& surface, std::span<const
   });
   cover(now, 0);
   measure();
-  const Points y_rest = s.vertices;
+  const Points& y_rest = rest_y_;
   const double dhat = settings_.thickness;
   for (std::size_t k = 0; k < candidates_.size(); ++k) {
     const Candidate& c = candidates_[k];
@@ -219,6 +221,7 @@ void SurfaceContact::measure() {
 }
 
 void SurfaceContact::cover(const Points& at, double sweep) {
+  if (sutures_changed_) mark_joined();
   place(at, &y_);
   const double dhat = settings_.thickness;
   if (rho_ >= 0 && reference_.rows() == y_.rows()) {
@@ -226,7 +229,8 @@ void SurfaceContact::cover(const Points& at, double sweep) {
     if (2 * (moved + sweep) + dhat <= rho_) return;
   }
   reference_ = y_;
-  // Room for motions of dhat / 2 more before the next rebuild.
+  // Room for motions of dhat / 2 more before the next rebuild (a slack of an edge length
+  // instead was measured half again slower on the embedded femur: more candidates to measure).
   rebuild(2 * dhat + 2 * sweep);
 }
 
@@ -270,8 +274,10 @@ void SurfaceContact::rebuild(double rho) {
           const auto& tri = triangles_[static_cast<std::size_t>(t)];
           if (tri[0] == i || tri[1] == i || tri[2] == i) continue;
           if (neighbours(vertex_copy_[i], triangle_copy_[t])) continue;
-          const Candidate c{i, t, 0, 0, copy_pair(vertex_copy_[i], triangle_copy_[t])};
-          if (proximity(c, y).distance <= rho) out.push_back(c);
+          Candidate c{i, t, 0, 0, 0, 0, copy_pair(vertex_copy_[i], triangle_copy_[t])};
+          if (!(proximity(c, y).distance <= rho)) continue;
+          c.rest_close = proximity(c, rest_y_).distance < settings_.thickness ? 1 : 0;
+          out.push_back(c);
         }
       } else {
         spatial::Aabb box;
@@ -283,8 +289,10 @@ void SurfaceContact::rebuild(double rho) {
           const auto& g = edges_[static_cast<std::size_t>(f)];
           if (e[0] == g[0] || e[0] == g[1] || e[1] == g[0] || e[1] == g[1]) continue;
           if (neighbours(edge_copy_[i], edge_copy_[f])) continue;
-          const Candidate c{i, f, 1, 0, copy_pair(edge_copy_[i], edge_copy_[f])};
-          if (proximity(c, y).distance <= rho) out.push_back(c);
+          Candidate c{i, f, 1, 0, 0, 0, copy_pair(edge_copy_[i], edge_copy_[f])};
+          if (!(proximity(c, y).distance <= rho)) continue;
+          c.rest_close = proximity(c, rest_y_).distance < settings_.thickness ? 1 : 0;
+          out.push_back(c);
         }
       }
     }
@@ -295,7 +303,33 @@ void SurfaceContact::rebuild(double rho) {
 }
 
 void SurfaceContact::mark_joined() {
-  for (Candidate& c : candidates_) c.joined = std::binary_search(joins_.begin(), joins_.end(), c.copies) ? 1 : 0;
+  // Sutured: close in the material, with a corner in a copy a spring holds (a primitive's own
+  // copy and its corners' copies may differ: a triangle's vertices can be embedded in its
+  // neighbours).
+  const auto sutured = [&](Index copy) { return static_cast<std::size_t>(copy) < sutured_.size() && sutured_[static_cast<std::size_t>(copy)] != 0; };
+  for (Candidate& c : candidates_) {
+    c.joined = std::binary_search(joins_.begin(), joins_.end(), c.copies) ? 1 : 0;
+    c.sutured = 0;
+    if (!c.rest_close || sutured_.empty()) continue;
+    for (const Index v : corners(c)) {
+      if (sutured(vertex_copy_[static_cast<std::size_t>(v)])) c.sutured = 1;
+    }
+  }
+  sutures_changed_ = false;
+}
+
+void SurfaceContact::suture(Index copy_a, Index copy_b) {
+  for (const Index copy : {copy_a, copy_b}) {
+    if (static_cast<std::size_t>(copy) >= sutured_.size()) sutured_.resize(static_cast<std::size_t>(copy) + 1, 0);
+    sutured_[static_cast<std::size_t>(copy)] = 1;
+  }
+  sutures_changed_ = true;
+}
+
+void SurfaceContact::clear_sutures() {
+  if (sutured_.empty()) return;
+  sutured_.clear();
+  sutures_changed_ = true;
 }
 
 double SurfaceContact::max_step(const Points& from, const double* direction) {
@@ -321,7 +355,7 @@ double SurfaceContact::max_step(const Points& from, const double* direction) {
     double t_min = 1;
     for (Index k = begin; k < end; ++k) {
       const Candidate& c = candidates_[k];
-      if (c.joined) continue;
+      if (c.joined || c.sutured) continue;
       const std::array<Index, 4> corner = corners(c);
       std::array<Vec3, 4> y, d;
       Vec3 mean = Vec3::Zero();

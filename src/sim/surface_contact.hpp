@@ -31,7 +31,9 @@
 // copies collide like any others. Why this cannot miss a real collision for long: copies are
 // joined only while some of their surfaces are still touching where they were cut apart, and a
 // copy spans one tet, so what goes unseen is confined to the two sides of a cut within a tet of
-// each other, and ends as soon as they have opened there.
+// each other, and ends as soon as they have opened there. Sutures (springs across an incision)
+// likewise take the pairs between their copies that were within dhat in the material out, while
+// they hold: they are there to bring the two sides back together.
 //
 // Broad phase: box hierarchies over the triangles and edges, refitted, queried with boxes grown
 // by the radius rho; the candidates (all pairs within rho at the reference positions) serve
@@ -106,6 +108,13 @@ class SurfaceContact {
   /// After a step, at its final positions: joins whose copies have no pair within dhat end.
   void update_joins(const Points& at);
 
+  /// Sutures: copies held to others across an incision by springs (Simulator::add_spring), whose
+  /// springs pull the two sides back into coincidence where the barrier would keep them apart:
+  /// pairs between two sutured copies that are within dhat of each other in the material are
+  /// not counted while the springs hold. Kept across surfaces; cleared with the springs.
+  void suture(Index copy_a, Index copy_b);
+  void clear_sutures();
+
   Index num_candidates() const { return static_cast<Index>(candidates_.size()); }
   Index num_joins() const { return static_cast<Index>(joins_.size()); }
   Index num_rebuilds() const { return rebuilds_; }
@@ -116,13 +125,16 @@ class SurfaceContact {
   struct Candidate {
     Index a, b;            // vertex and triangle, or two edges
     std::uint8_t edges;    // 0: vertex-triangle, 1: edge-edge
-    std::uint8_t joined;   // copies joined across a cut (not counted)
-    std::uint64_t copies;  // the copy pair, (min << 32) | max
+    std::uint8_t joined;      // copies joined across a cut (not counted)
+    std::uint8_t rest_close;  // within dhat in the material
+    std::uint8_t sutured;     // rest_close between sutured copies (not counted)
+    std::uint64_t copies;     // the copy pair, (min << 32) | max
   };
   void place(const Points& at, Points* y) const;
   /// Makes the candidates cover positions `at` and motions of up to `sweep` from there.
   void cover(const Points& at, double sweep);
   void rebuild(double rho);
+  /// The candidates' joined and sutured flags, from joins_ and sutured_.
   void mark_joined();
   /// proximities_ of every candidate at y_, in parallel.
   void measure();
@@ -142,8 +154,11 @@ class SurfaceContact {
   std::vector<Index> edge_copy_;
   std::vector<std::array<Index, 4>> copy_nodes_;
   double mean_edge_ = 0;
-  // Joined copy pairs, sorted.
+  // Joined copy pairs, sorted; sutured copies (per copy id); the surface's rest positions.
   std::vector<std::uint64_t> joins_;
+  std::vector<std::uint8_t> sutured_;
+  bool sutures_changed_ = false;
+  Points rest_y_;
   // The Verlet list: candidates within rho_ of each other at vertex positions reference_.
   std::vector<Candidate> candidates_;
   std::vector<collision::Proximity> proximities_;
@@ -162,7 +177,7 @@ void SurfaceContact::for_each_active(const Points& at, Visit&& visit) {
   const double dhat = settings_.thickness, kappa = settings_.stiffness;
   for (std::size_t k = 0; k < candidates_.size(); ++k) {
     const collision::Proximity& p = proximities_[k];
-    if (candidates_[k].joined || !(p.distance < dhat)) continue;
+    if (candidates_[k].joined || candidates_[k].sutured || !(p.distance < dhat)) continue;
     const ContactTerm t = term(candidates_[k], p);
     if (!(p.distance > 0)) {
       visit(t, std::numeric_limits<double>::infinity(), Vec3::Zero().eval(), Mat3::Zero().eval());

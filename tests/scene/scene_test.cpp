@@ -314,5 +314,36 @@ TEST(Scene, CheckIntersectionsCountsPiecesPassingThroughEachOther) {
   EXPECT_EQ(plain_text.find("intersecting"), std::string::npos);
 }
 
+TEST(Scene, SelfCollisionIsReadAndReported) {
+  const std::string base = std::string("{") + kCube + R"(, "time": {"duration": 0.1}, )";
+  EXPECT_NE(load_error(base + R"("self_collision": 3})").find("self_collision: must be true or false"), std::string::npos);
+  EXPECT_NE(load_error(base + R"("self_collision": {"thickness": -1}})").find("self_collision.thickness: must be positive"), std::string::npos);
+  EXPECT_NE(load_error(base + R"("self_collision": {"friction": 1}})").find("self_collision: unknown key 'friction'"), std::string::npos);
+  testing::TempDir dir;
+  const Scene plain = load_scene(write_scene(dir.path(), base + R"("self_collision": true})"));
+  EXPECT_TRUE(plain.self_collision);
+  EXPECT_EQ(plain.self_contact.thickness, 0);  // the simulator's default
+  const Scene tuned = load_scene(write_scene(dir.path(), base + R"("self_collision": {"thickness": 0.01, "stiffness": 5e3}})"));
+  EXPECT_TRUE(tuned.self_collision);
+  EXPECT_EQ(tuned.self_contact.thickness, 0.01);
+  EXPECT_EQ(tuned.self_contact.stiffness, 5e3);
+  EXPECT_FALSE(load_scene(write_scene(dir.path(), base + R"("self_collision": false})")).self_collision);
+
+  // The halves of a fresh cut pulled apart: contact on, nothing crosses, the summary says what
+  // contact did.
+  std::string apart = halves_driven(1);
+  apart.insert(apart.find("\"time\""), R"("self_collision": true, )");
+  SceneRunOptions check;
+  check.check_intersections = true;
+  const SceneSummary summary = run_scene(load_scene(write_scene(dir.path(), apart)), dir.path() / "apart", check);
+  EXPECT_EQ(summary.pieces, 2);
+  EXPECT_EQ(summary.max_intersecting_pairs, 0);
+  EXPECT_EQ(summary.unconverged_steps, 0);
+  std::ifstream file(dir.path() / "apart" / "summary.json");
+  const std::string text((std::istreambuf_iterator<char>(file)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find("\"self_collision\""), std::string::npos);
+  EXPECT_NE(text.find("\"max_contact_pairs\""), std::string::npos);
+}
+
 }  // namespace
 }  // namespace tetcut
