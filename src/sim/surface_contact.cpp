@@ -88,7 +88,8 @@ void SurfaceContact::clear_surface() {
   candidates_.clear();
   proximities_.clear();
   rho_ = -1;
-  trees_built_ = false;
+  tree_built_ = false;
+  group_copy_.clear();
 }
 
 bool SurfaceContact::neighbours(Index a, Index b) const {
@@ -138,6 +139,7 @@ void SurfaceContact::set_surface(const MaterialSurface& surface, std::span<const
   }
   mean_edge_ = edges_.empty() ? 0.0 : length / static_cast<double>(edges_.size());
   rest_y_ = s.vertices;
+  group_primitives();
   if (!enabled() || !(settings_.thickness > 0)) return;
 
   // Joins: the old ones of copies this cut left alone, and new ones where a changed copy's
@@ -160,6 +162,32 @@ void SurfaceContact::set_surface(const MaterialSurface& surface, std::span<const
   std::sort(joins_.begin(), joins_.end());
   joins_.erase(std::unique(joins_.begin(), joins_.end()), joins_.end());
   mark_joined();
+}
+
+void SurfaceContact::group_primitives() {
+  // The copies that own primitives, ascending, and each one's vertices, triangles and edges.
+  group_copy_.clear();
+  group_copy_.insert(group_copy_.end(), vertex_copy_.begin(), vertex_copy_.end());
+  group_copy_.insert(group_copy_.end(), triangle_copy_.begin(), triangle_copy_.end());
+  group_copy_.insert(group_copy_.end(), edge_copy_.begin(), edge_copy_.end());
+  std::sort(group_copy_.begin(), group_copy_.end());
+  group_copy_.erase(std::unique(group_copy_.begin(), group_copy_.end()), group_copy_.end());
+  const auto group_of = [&](Index copy) {
+    return static_cast<Index>(std::lower_bound(group_copy_.begin(), group_copy_.end(), copy) - group_copy_.begin());
+  };
+  const auto G = static_cast<Index>(group_copy_.size());
+  const auto bucket = [&](const std::vector<Index>& owner, std::vector<Index>* start, std::vector<Index>* items) {
+    start->assign(static_cast<std::size_t>(G) + 1, 0);
+    for (const Index copy : owner) ++(*start)[static_cast<std::size_t>(group_of(copy)) + 1];
+    for (Index g = 0; g < G; ++g) (*start)[g + 1] += (*start)[g];
+    items->resize(owner.size());
+    std::vector<Index> fill(start->begin(), start->end() - 1);
+    for (std::size_t i = 0; i < owner.size(); ++i) (*items)[static_cast<std::size_t>(fill[static_cast<std::size_t>(group_of(owner[i]))]++)] = static_cast<Index>(i);
+  };
+  bucket(vertex_copy_, &vertex_start_, &group_vertices_);
+  bucket(triangle_copy_, &triangle_start_, &group_triangles_);
+  bucket(edge_copy_, &edge_start_, &group_edges_);
+  tree_built_ = false;
 }
 
 void SurfaceContact::place(const Points& at, Points* y) const {
@@ -229,8 +257,9 @@ void SurfaceContact::cover(const Points& at, double sweep) {
     if (2 * (moved + sweep) + dhat <= rho_) return;
   }
   reference_ = y_;
-  // Room for motions of dhat / 2 more before the next rebuild (a slack of an edge length
-  // instead was measured half again slower on the embedded femur: more candidates to measure).
+  // Room for motions of dhat / 2 more before the next rebuild (more slack, for one more move
+  // like this one, was measured slower on the hanging femur: its larger lists cost more than
+  // the rebuilds they saved).
   rebuild(2 * dhat + 2 * sweep);
 }
 
@@ -238,61 +267,101 @@ void SurfaceContact::rebuild(double rho) {
   rho_ = rho;
   ++rebuilds_;
   const Points& y = reference_;
-  std::vector<spatial::Aabb> triangle_boxes(triangles_.size()), edge_boxes(edges_.size());
-  for (std::size_t t = 0; t < triangles_.size(); ++t) {
-    for (const Index v : triangles_[t]) triangle_boxes[t].extend(y.row(v).transpose());
-  }
-  for (std::size_t e = 0; e < edges_.size(); ++e) {
-    for (const Index v : edges_[e]) edge_boxes[e].extend(y.row(v).transpose());
-  }
-  if (!trees_built_) {
-    triangle_tree_ = spatial::BoxTree(triangle_boxes);
-    edge_tree_ = spatial::BoxTree(edge_boxes);
-    trees_built_ = true;
+  // Boxes of each copy's primitives, in a hierarchy built once per surface and refitted.
+  const auto G = static_cast<Index>(group_copy_.size());
+  std::vector<spatial::Aabb> boxes(static_cast<std::size_t>(G));
+  for_chunks(G, kNodeChunk, [&](Index begin, Index end, Index) {
+    for (Index g = begin; g < end; ++g) {
+      spatial::Aabb& box = boxes[static_cast<std::size_t>(g)];
+      for (Index k = vertex_start_[g]; k < vertex_start_[g + 1]; ++k) box.extend(Vec3(y.row(group_vertices_[k]).transpose()));
+      for (Index k = triangle_start_[g]; k < triangle_start_[g + 1]; ++k) {
+        for (const Index v : triangles_[static_cast<std::size_t>(group_triangles_[k])]) box.extend(Vec3(y.row(v).transpose()));
+      }
+      for (Index k = edge_start_[g]; k < edge_start_[g + 1]; ++k) {
+        for (const Index v : edges_[static_cast<std::size_t>(group_edges_[k])]) box.extend(Vec3(y.row(v).transpose()));
+      }
+    }
+  });
+  // And of every triangle and edge: a pair's boxes are compared before its distance is measured
+  // (most pairs of nearby copies are far apart, and boxes cost a few comparisons).
+  triangle_boxes_.assign(triangles_.size(), spatial::Aabb{});
+  edge_boxes_.assign(edges_.size(), spatial::Aabb{});
+  for_chunks(static_cast<Index>(triangles_.size()), kNodeChunk, [&](Index begin, Index end, Index) {
+    for (Index t = begin; t < end; ++t) {
+      for (const Index v : triangles_[static_cast<std::size_t>(t)]) triangle_boxes_[static_cast<std::size_t>(t)].extend(Vec3(y.row(v).transpose()));
+    }
+  });
+  for_chunks(static_cast<Index>(edges_.size()), kNodeChunk, [&](Index begin, Index end, Index) {
+    for (Index e = begin; e < end; ++e) {
+      for (const Index v : edges_[static_cast<std::size_t>(e)]) edge_boxes_[static_cast<std::size_t>(e)].extend(Vec3(y.row(v).transpose()));
+    }
+  });
+  if (!tree_built_) {
+    copy_tree_ = spatial::BoxTree(boxes);
+    tree_built_ = true;
   } else {
-    triangle_tree_.refit(std::move(triangle_boxes));
-    edge_tree_.refit(std::move(edge_boxes));
+    copy_tree_.refit(std::move(boxes));
   }
-  // Candidates per fixed chunk of vertices, then of edges, joined in chunk order.
-  const auto V = static_cast<Index>(vertex_nodes_.size()), E = static_cast<Index>(edges_.size());
-  constexpr Index kChunk = 256;
-  const Index vertex_chunks = (V + kChunk - 1) / kChunk, edge_chunks = (E + kChunk - 1) / kChunk;
-  std::vector<std::vector<Candidate>> found(static_cast<std::size_t>(vertex_chunks + edge_chunks));
-  for_chunks(vertex_chunks + edge_chunks, 1, [&](Index chunk, Index, Index) {
+  // Pairs of copies whose boxes come within rho, each once (g < h), neighbours left out; then
+  // their primitives against each other. Per fixed chunk of copies, joined in chunk order.
+  constexpr Index kChunk = 64;
+  const Index chunks = (G + kChunk - 1) / kChunk;
+  std::vector<std::vector<Candidate>> found(static_cast<std::size_t>(chunks));
+  for_chunks(G, kChunk, [&](Index begin, Index end, Index chunk) {
     std::vector<Index> hits;
     std::vector<Candidate>& out = found[static_cast<std::size_t>(chunk)];
-    const bool edge_chunk = chunk >= vertex_chunks;
-    const Index first = (edge_chunk ? chunk - vertex_chunks : chunk) * kChunk;
-    const Index last = std::min(edge_chunk ? E : V, first + kChunk);
-    for (Index i = first; i < last; ++i) {
-      hits.clear();
-      if (!edge_chunk) {
-        spatial::Aabb box;
-        box.extend(Vec3(y.row(i).transpose()));
-        triangle_tree_.query(grown(box, rho), &hits);
-        for (const Index t : hits) {
-          const auto& tri = triangles_[static_cast<std::size_t>(t)];
-          if (tri[0] == i || tri[1] == i || tri[2] == i) continue;
-          if (neighbours(vertex_copy_[i], triangle_copy_[t])) continue;
-          Candidate c{i, t, 0, 0, 0, 0, copy_pair(vertex_copy_[i], triangle_copy_[t])};
-          if (!(proximity(c, y).distance <= rho)) continue;
-          c.rest_close = proximity(c, rest_y_).distance < settings_.thickness ? 1 : 0;
-          out.push_back(c);
+    const auto consider = [&](Candidate c) {
+      const std::array<Index, 4> k = corners(c);
+      const bool shared = c.edges ? (k[0] == k[2] || k[0] == k[3] || k[1] == k[2] || k[1] == k[3]) : (k[0] == k[1] || k[0] == k[2] || k[0] == k[3]);
+      if (shared || !(proximity(c, y).distance <= rho)) return;
+      c.rest_close = proximity(c, rest_y_).distance < settings_.thickness ? 1 : 0;
+      out.push_back(c);
+    };
+    // The primitives of copy g that reach copy h's box, then those pairs: most pairs of nearby
+    // copies have none (boxes of tets that share no node overlap often in a BCC lattice).
+    std::vector<Index> near_vertices, near_triangles, near_edges_g, near_edges_h;
+    const auto gather = [&](const std::vector<Index>& start, const std::vector<Index>& items, Index g, const spatial::Aabb& reach,
+                            const auto& box_of, std::vector<Index>* into) {
+      into->clear();
+      for (Index k = start[g]; k < start[g + 1]; ++k) {
+        if (reach.meets(box_of(items[k]))) into->push_back(items[k]);
+      }
+    };
+    const auto vertex_box = [&](Index v) {
+      spatial::Aabb b;
+      b.extend(Vec3(y.row(v).transpose()));
+      return b;
+    };
+    const auto triangle_box = [&](Index t) { return triangle_boxes_[static_cast<std::size_t>(t)]; };
+    const auto edge_box = [&](Index e) { return edge_boxes_[static_cast<std::size_t>(e)]; };
+    const std::vector<spatial::Aabb>& copy_boxes = copy_tree_.mutable_boxes();
+    const auto vertices_against_triangles = [&](Index g, Index h, std::uint64_t key) {
+      gather(vertex_start_, group_vertices_, g, grown(copy_boxes[static_cast<std::size_t>(h)], rho), vertex_box, &near_vertices);
+      if (near_vertices.empty()) return;
+      gather(triangle_start_, group_triangles_, h, grown(copy_boxes[static_cast<std::size_t>(g)], rho), triangle_box, &near_triangles);
+      for (const Index v : near_vertices) {
+        const spatial::Aabb reach = grown(vertex_box(v), rho);
+        for (const Index t : near_triangles) {
+          if (reach.meets(triangle_boxes_[static_cast<std::size_t>(t)])) consider({v, t, 0, 0, 0, 0, key});
         }
-      } else {
-        spatial::Aabb box;
-        for (const Index v : edges_[static_cast<std::size_t>(i)]) box.extend(Vec3(y.row(v).transpose()));
-        edge_tree_.query(grown(box, rho), &hits);
-        const auto& e = edges_[static_cast<std::size_t>(i)];
-        for (const Index f : hits) {
-          if (f <= i) continue;
-          const auto& g = edges_[static_cast<std::size_t>(f)];
-          if (e[0] == g[0] || e[0] == g[1] || e[1] == g[0] || e[1] == g[1]) continue;
-          if (neighbours(edge_copy_[i], edge_copy_[f])) continue;
-          Candidate c{i, f, 1, 0, 0, 0, copy_pair(edge_copy_[i], edge_copy_[f])};
-          if (!(proximity(c, y).distance <= rho)) continue;
-          c.rest_close = proximity(c, rest_y_).distance < settings_.thickness ? 1 : 0;
-          out.push_back(c);
+      }
+    };
+    for (Index g = begin; g < end; ++g) {
+      hits.clear();
+      copy_tree_.query(grown(copy_boxes[static_cast<std::size_t>(g)], rho), &hits);
+      for (const Index h : hits) {
+        if (h <= g || neighbours(group_copy_[g], group_copy_[h])) continue;
+        const std::uint64_t key = copy_pair(group_copy_[g], group_copy_[h]);
+        vertices_against_triangles(g, h, key);
+        vertices_against_triangles(h, g, key);
+        gather(edge_start_, group_edges_, g, grown(copy_boxes[static_cast<std::size_t>(h)], rho), edge_box, &near_edges_g);
+        if (near_edges_g.empty()) continue;
+        gather(edge_start_, group_edges_, h, grown(copy_boxes[static_cast<std::size_t>(g)], rho), edge_box, &near_edges_h);
+        for (const Index e : near_edges_g) {
+          const spatial::Aabb reach = grown(edge_boxes_[static_cast<std::size_t>(e)], rho);
+          for (const Index f : near_edges_h) {
+            if (reach.meets(edge_boxes_[static_cast<std::size_t>(f)])) consider({e, f, 1, 0, 0, 0, key});
+          }
         }
       }
     }
