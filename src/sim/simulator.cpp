@@ -5,6 +5,7 @@
 #include <tetcut/error.hpp>
 #include <tetcut/sim.hpp>
 
+#include "collision/twins.hpp"
 #include "sim/simulator_state.hpp"
 
 #include <algorithm>
@@ -366,10 +367,11 @@ Vec3 Simulator::momentum() const { return (state_->mass.asDiagonal() * state_->v
 
 std::vector<std::pair<EmbeddedPoint, EmbeddedPoint>> incision_pairs(const MaterialSurface& surface, std::int64_t first_cut,
                                                                     std::int64_t end_cut) {
-  // Vertices on the chosen cut triangles, by rest position; a position held by two copies is a
-  // point on both sides of the incision.
-  std::map<std::array<double, 3>, std::vector<Index>> by_position;
+  // Vertices on the chosen cut triangles, grouped by rest position up to its rounding (two
+  // copies may round one point differently: collision/twins.hpp); a position held by two copies
+  // is a point on both sides of the incision.
   std::vector<std::uint8_t> seen(static_cast<std::size_t>(surface.surface.num_vertices()), 0);
+  std::vector<Index> on_cut;
   for (Index t = 0; t < surface.surface.num_triangles(); ++t) {
     const std::int64_t source = surface.triangle_source[t];
     if (source < first_cut || source >= end_cut) continue;
@@ -377,13 +379,27 @@ std::vector<std::pair<EmbeddedPoint, EmbeddedPoint>> incision_pairs(const Materi
       const Index v = surface.surface.triangles(t, k);
       if (seen[v]) continue;
       seen[v] = 1;
-      const auto row = surface.surface.vertices.row(v);
-      by_position[{row[0], row[1], row[2]}].push_back(v);
+      on_cut.push_back(v);
     }
   }
+  std::sort(on_cut.begin(), on_cut.end());
+  Points rest(static_cast<Index>(on_cut.size()), 3);
+  for (std::size_t i = 0; i < on_cut.size(); ++i) rest.row(static_cast<Index>(i)) = surface.surface.vertices.row(on_cut[i]);
+  const double scale = rest.size() > 0 ? rest.cwiseAbs().maxCoeff() : 0.0;
+  const std::vector<Index> twin = collision::twin_ids(rest, rest, std::max(64 * std::numeric_limits<double>::epsilon() * scale, std::numeric_limits<double>::min()),
+                                                      std::numeric_limits<double>::infinity());
+  // Per group (by its id, in the order of its smallest member): the first vertex with each other.
+  std::map<Index, std::vector<Index>> groups;
+  for (std::size_t i = 0; i < on_cut.size(); ++i) groups[twin[i]].push_back(on_cut[i]);
   std::vector<std::pair<EmbeddedPoint, EmbeddedPoint>> pairs;
   const auto point = [&](Index v) { return EmbeddedPoint{surface.vertex_tet[v], surface.vertex_weights.row(v).transpose()}; };
-  for (const auto& [position, vertices] : by_position) {
+  std::vector<std::vector<Index>> ordered;
+  for (auto& [id, vertices] : groups) ordered.push_back(std::move(vertices));
+  std::sort(ordered.begin(), ordered.end(), [&](const auto& a, const auto& b) {
+    const auto ra = surface.surface.vertices.row(a[0]), rb = surface.surface.vertices.row(b[0]);
+    return std::lexicographical_compare(ra.data(), ra.data() + 3, rb.data(), rb.data() + 3);
+  });
+  for (const std::vector<Index>& vertices : ordered) {
     for (std::size_t i = 1; i < vertices.size(); ++i) {
       if (surface.vertex_tet[vertices[i]] != surface.vertex_tet[vertices[0]]) pairs.emplace_back(point(vertices[0]), point(vertices[i]));
     }

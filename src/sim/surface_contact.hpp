@@ -115,8 +115,8 @@ class SurfaceContact {
 
   /// Sutures: copies held to others across an incision by springs (Simulator::add_spring), whose
   /// springs pull the two sides back into coincidence where the barrier would keep them apart:
-  /// pairs between two sutured copies that are within dhat of each other in the material are
-  /// not counted while the springs hold. Kept across surfaces; cleared with the springs.
+  /// pairs within dhat of each other in the material with a corner in a sutured copy, and all
+  /// pairs between two copies one spring joins, are not counted while the springs hold. Kept across surfaces; cleared with the springs.
   void suture(Index copy_a, Index copy_b);
   void clear_sutures();
 
@@ -163,6 +163,7 @@ class SurfaceContact {
   // Joined copy pairs, sorted; sutured copies (per copy id); the surface's rest positions.
   std::vector<std::uint64_t> joins_;
   std::vector<std::uint8_t> sutured_;
+  std::vector<std::uint64_t> suture_pairs_;  // the copy pairs springs join, sorted
   bool sutures_changed_ = false;
   Points rest_y_;
   // The Verlet list: candidates within rho_ of each other at vertex positions reference_.
