@@ -25,7 +25,7 @@
 //     "obstacles": [{"plane": {"point", "normal"}} | {"sphere": {"centre", "radius"}}
 //                   | {"box": {"min", "max"}}],
 //     "contact_stiffness": K
-//     "self_collision": true | false | {"thickness": m, "stiffness": N/m}   contact of the material
+//     "self_collision": true | false | {"thickness": m, "stiffness": N/m, "friction": mu}   contact of the material
 //                   surface with itself and between pieces (Simulator::set_contact_surface); off
 //                   by default (see the README for its cost)
 //     "cuts":      [{"time", "space": "rest"|"world", and one of

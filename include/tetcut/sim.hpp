@@ -187,6 +187,11 @@ struct SurfaceContactOptions {
   /// kappa (N/m) scaling the barrier. 0: Young's modulus times the surface's mean edge length
   /// (a pair about as stiff as a cube of the material an edge wide).
   double stiffness = 0;
+  /// Coulomb friction coefficient between parts of the surface (0: none), smoothed and lagged
+  /// as in IPC: each step takes the normals and normal forces of the pairs in contact at its
+  /// start, and slips below a hundredth of the thickness are resisted as by a stiff spring
+  /// (static friction). Not against obstacles yet.
+  double friction = 0;
 };
 
 struct SimulatorState;

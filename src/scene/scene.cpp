@@ -413,12 +413,14 @@ Scene parse_scene(std::string_view text, const std::filesystem::path& path) {
   }
   if (const auto k = root.get("contact_stiffness")) scene.contact_stiffness = k->positive();
   if (const auto self = root.get("self_collision")) {
-    // true | false | {"thickness": m, "stiffness": N/m} (either may be left to its default).
+    // true | false | {"thickness": m, "stiffness": N/m, "friction": mu} (each may be left to its
+    // default; friction 0).
     if (self->is_object()) {
-      self->allow({"thickness", "stiffness"});
+      self->allow({"thickness", "stiffness", "friction"});
       scene.self_collision = true;
       if (const auto t = self->get("thickness")) scene.self_contact.thickness = t->positive();
       if (const auto k = self->get("stiffness")) scene.self_contact.stiffness = k->positive();
+      if (const auto mu = self->get("friction")) scene.self_contact.friction = mu->non_negative();
     } else {
       scene.self_collision = self->boolean();
     }

@@ -248,6 +248,13 @@ StepReport Simulator::minimise(const StepOptions& options, bool inertia) {
   // this step).
   if (s.surface_contact.enabled()) {
     const Clock::time_point contact_start = Clock::now();
+    // Friction acts over this step with the normals and forces of its start (lagged).
+    // (A static solve has no step to slip over: none.)
+    if (inertia) {
+      s.surface_contact.lag_friction(s.start);
+    } else {
+      s.surface_contact.drop_friction();
+    }
     s.displacement = x - s.start;
     const double t = s.surface_contact.max_step(s.start, s.displacement.data());
     if (t < 1) {

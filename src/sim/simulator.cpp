@@ -171,8 +171,9 @@ void Simulator::set_contact_surface(const MaterialSurface& surface, const Surfac
     }
   }
   if (!surface.vertex_weights.allFinite() || !t.vertices.allFinite()) throw Error(ErrorKind::kInvalidArgument, "contact surface: not finite");
-  if (!(options.thickness >= 0) || !(options.stiffness >= 0) || !std::isfinite(options.thickness) || !std::isfinite(options.stiffness)) {
-    throw Error(ErrorKind::kInvalidArgument, "contact surface: thickness and stiffness must not be negative");
+  if (!(options.thickness >= 0) || !(options.stiffness >= 0) || !(options.friction >= 0) || !std::isfinite(options.thickness) ||
+      !std::isfinite(options.stiffness) || !std::isfinite(options.friction)) {
+    throw Error(ErrorKind::kInvalidArgument, "contact surface: thickness, stiffness and friction must not be negative");
   }
   std::vector<std::array<Index, 4>> copy_nodes(s.elements.size());
   for (std::size_t e = 0; e < s.elements.size(); ++e) copy_nodes[e] = s.elements[e].nodes;
@@ -180,13 +181,14 @@ void Simulator::set_contact_surface(const MaterialSurface& surface, const Surfac
   s.surface_contact_options = options;
   // The defaults follow the surface (its mean edge length): a first pass without settings finds it.
   s.surface_contact.set_settings({});
-  s.surface_contact.set_surface(surface, copy_nodes, s.x, s.contact_changed);
+  s.surface_contact.set_surface(surface, copy_nodes, s.rest, s.x, s.contact_changed);
   const double edge = s.surface_contact.mean_edge_length();
   detail::SurfaceContact::Settings settings;
   settings.thickness = options.thickness > 0 ? options.thickness : 0.1 * edge;
   settings.stiffness = options.stiffness > 0 ? options.stiffness : s.material.youngs_modulus * edge;
+  settings.friction = options.friction;
   s.surface_contact.set_settings(settings);
-  s.surface_contact.set_surface(surface, copy_nodes, s.x, s.contact_changed);
+  s.surface_contact.set_surface(surface, copy_nodes, s.rest, s.x, s.contact_changed);
   std::fill(s.contact_changed.begin(), s.contact_changed.end(), 0);
 }
 

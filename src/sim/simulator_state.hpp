@@ -222,6 +222,9 @@ void SimulatorState::for_each_constraint(const Points& at, Visit&& visit) const 
   surface_contact.for_each_active(at, [&](const detail::ContactTerm& t, double energy, const Vec3& dE, const Mat3& d2E) {
     visit(t.nodes, t.coefficients, t.count, energy, dE, d2E);
   });
+  surface_contact.for_each_friction(at, [&](const detail::ContactTerm& t, double energy, const Vec3& dE, const Mat3& d2E) {
+    visit(t.nodes, t.coefficients, t.count, energy, dE, d2E);
+  });
 }
 
 }  // namespace tetcut::sim

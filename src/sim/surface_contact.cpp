@@ -70,6 +70,38 @@ double pair_energy(const std::array<Vec3, 4>& y, bool edges, double dhat, double
   return kappa * barrier(d, dhat);
 }
 
+double friction_energy(const Vec3& u, const Vec3& n, double normal_force, double mu, double eps, Vec3* gradient, Mat3* hessian) {
+  const Mat3 P = Mat3::Identity() - n * n.transpose();
+  const Vec3 ut = P * u;
+  const double y = ut.norm(), scale = mu * normal_force;
+  double f0, g, dg;  // f0(y); g = f1(y) / y and its derivative in y
+  if (y < eps) {
+    f0 = -y * y * y / (3 * eps * eps) + y * y / eps + eps / 3;
+    g = 2 / eps - y / (eps * eps);
+    dg = -1 / (eps * eps);
+  } else {
+    f0 = y;
+    g = 1 / y;
+    dg = -1 / (y * y);
+  }
+  if (gradient) *gradient = scale * g * ut;
+  if (hessian) {
+    *hessian = scale * g * P;
+    if (y > 0) *hessian += scale * dg / y * ut * ut.transpose();
+  }
+  return scale * f0;
+}
+
+void SurfaceContact::lag_friction(const Points& start) {
+  friction_.clear();
+  if (!enabled() || !(settings_.friction > 0)) return;
+  for_each_active(start, [&](const ContactTerm& t, double, const Vec3& dE, const Mat3&) {
+    const double force = dE.norm();
+    if (!(force > 0) || !(t.proximity.distance > 0)) return;
+    friction_.push_back({t, t.proximity.r / t.proximity.distance, t.proximity.r, force});
+  });
+}
+
 void SurfaceContact::reset() {
   clear_surface();
   joins_.clear();
@@ -88,6 +120,7 @@ void SurfaceContact::clear_surface() {
   copy_nodes_.clear();
   candidates_.clear();
   proximities_.clear();
+  friction_.clear();
   rho_ = -1;
   tree_built_ = false;
   group_copy_.clear();
@@ -103,8 +136,18 @@ bool SurfaceContact::neighbours(Index a, Index b) const {
   return false;
 }
 
-void SurfaceContact::set_surface(const MaterialSurface& surface, std::span<const std::array<Index, 4>> copy_nodes, const Points& now,
-                                 std::span<const std::uint8_t> changed) {
+bool SurfaceContact::rest_neighbours(Index a, Index b) const {
+  for (const Index p : copy_nodes_[static_cast<std::size_t>(a)]) {
+    for (const Index q : copy_nodes_[static_cast<std::size_t>(b)]) {
+      if (node_rest_.row(p) == node_rest_.row(q)) return true;
+    }
+  }
+  return false;
+}
+
+void SurfaceContact::set_surface(const MaterialSurface& surface, std::span<const std::array<Index, 4>> copy_nodes, const Points& rest,
+                                 const Points& now, std::span<const std::uint8_t> changed) {
+  node_rest_ = rest;
   clear_surface();
   const TriangleSurface& s = surface.surface;
   const auto V = static_cast<std::size_t>(s.num_vertices()), F = static_cast<std::size_t>(s.num_triangles());
@@ -157,7 +200,15 @@ void SurfaceContact::set_surface(const MaterialSurface& surface, std::span<const
     const Candidate& c = candidates_[k];
     if (!(proximities_[k].distance < dhat)) continue;
     if (!was_changed(static_cast<Index>(c.copies >> 32)) && !was_changed(static_cast<Index>(c.copies & 0xffffffffu))) continue;
-    if (proximities_[k].distance > 0 && !(proximity(c, y_rest).distance < dhat)) continue;
+    // Across a cut: close in the material, and copies of tets that were neighbours before any
+    // cut (a cut's new nodes keep their sources' rest positions, so such copies have corners at
+    // one rest point). Separate objects that merely start close are not joined: the barrier
+    // holds them apart from the start. Only pairs touching now are joined whatever they are
+    // (at distance 0 the barrier is infinite).
+    if (proximities_[k].distance > 0 &&
+        (!(proximity(c, y_rest).distance < dhat) || !rest_neighbours(static_cast<Index>(c.copies >> 32), static_cast<Index>(c.copies & 0xffffffffu)))) {
+      continue;
+    }
     joins_.push_back(c.copies);
   }
   std::sort(joins_.begin(), joins_.end());

@@ -26,7 +26,9 @@
 // whose surfaces a cut has just made coincide (both sides of a fresh cut are at distance 0, where
 // the barrier is infinite). When the surface is set after a cut, a pair of copies becomes joined
 // when one of them changed in that cut and some pair of their primitives is within dhat both in
-// rest space and now (or at distance 0 now: touching from the start). The join lasts until no
+// rest space and now, and the two are copies of tets that were neighbours before the cut (or at
+// distance 0 now: touching from the start; separate objects that merely start close are not
+// joined). The join lasts until no
 // pair of their primitives is within dhat any more (checked after every step); from then on the
 // copies collide like any others. Why this cannot miss a real collision for long: copies are
 // joined only while some of their surfaces are still touching where they were cut apart, and a
@@ -71,6 +73,14 @@ double barrier_second(double d, double dhat);
 double pair_energy(const std::array<Vec3, 4>& y, bool edges, double dhat, double kappa, collision::Vec12* gradient = nullptr,
                    collision::Mat12* hessian = nullptr);
 
+/// Smoothed Coulomb friction of one pair over a step (IPC's lagged friction, Li et al. 2020):
+/// with u the closest points' relative displacement since the step's start and u_T its part
+/// across the (lagged) normal n, D = mu lambda f0(|u_T|), f0(y) = y beyond eps and
+/// -y^3 / (3 eps^2) + y^2 / eps + eps / 3 below (C1: static friction as a stiff spring below
+/// eps). Returns D; the exact gradient and Hessian in u when asked.
+double friction_energy(const Vec3& u, const Vec3& n, double normal_force, double mu, double eps, Vec3* gradient = nullptr,
+                       Mat3* hessian = nullptr);
+
 /// One pair as a soft constraint: r = sum_i coefficients[i] x_{nodes[i]} (count distinct nodes).
 struct ContactTerm {
   std::array<Index, 16> nodes;
@@ -84,6 +94,7 @@ class SurfaceContact {
   struct Settings {
     double thickness = 0;  ///< dhat
     double stiffness = 0;  ///< kappa
+    double friction = 0;   ///< Coulomb coefficient mu (0: none)
   };
 
   bool enabled() const { return !triangles_.empty(); }
@@ -91,9 +102,10 @@ class SurfaceContact {
   void set_settings(const Settings& settings) { settings_ = settings; }
 
   /// Takes the surface (rest positions, its vertices embedded in the copies with `copy_nodes`)
-  /// with the nodes `now`; `changed`, per copy, whether the cuts since the last surface changed
-  /// it (its joins are recomputed; the others' are kept). O(F log F + candidates).
-  void set_surface(const MaterialSurface& surface, std::span<const std::array<Index, 4>> copy_nodes, const Points& now,
+  /// with the nodes' positions in the material (`rest`) and `now`; `changed`, per copy, whether
+  /// the cuts since the last surface changed it (its joins are recomputed; the others' are
+  /// kept). O(F log F + candidates).
+  void set_surface(const MaterialSurface& surface, std::span<const std::array<Index, 4>> copy_nodes, const Points& rest, const Points& now,
                    std::span<const std::uint8_t> changed);
   /// Drops the surface (a cut changes it; set it again), keeping the joins.
   void clear_surface();
@@ -109,6 +121,16 @@ class SurfaceContact {
   /// node) keeps every counted pair at a positive distance, with a margin: conservative
   /// advancement stops a pair at a tenth of its starting distance. 1 when nothing comes close.
   double max_step(const Points& from, const double* direction);
+
+  /// Friction of the step starting at `start`: the pairs in contact there, each with its normal
+  /// and normal force, held for the step (lagged). None when the friction coefficient is 0.
+  void lag_friction(const Points& start);
+  void drop_friction() { friction_.clear(); }
+  /// Calls visit(term, energy, dE/du, d2E/du2) for each lagged pair at positions `at` (u the
+  /// closest points' displacement since the start; the matrix takes mu lambda f1(y)/y (I - n n^T),
+  /// positive semi-definite).
+  template <typename Visit>
+  void for_each_friction(const Points& at, Visit&& visit) const;
 
   /// After a step, at its final positions: joins whose copies have no pair within dhat end.
   void update_joins(const Points& at);
@@ -148,6 +170,9 @@ class SurfaceContact {
   std::array<Index, 4> corners(const Candidate& c) const;
   ContactTerm term(const Candidate& c, const collision::Proximity& p) const;
   bool neighbours(Index copy_a, Index copy_b) const;
+  /// Whether two copies have corners at one rest point: copies of one tet, or of neighbours,
+  /// before the cuts that separated them.
+  bool rest_neighbours(Index copy_a, Index copy_b) const;
 
   Settings settings_;
   // The surface: vertices as nodes and weights, triangles and edges with their copies.
@@ -159,11 +184,20 @@ class SurfaceContact {
   std::vector<std::array<Index, 2>> edges_;
   std::vector<Index> edge_copy_;
   std::vector<std::array<Index, 4>> copy_nodes_;
+  Points node_rest_;
   double mean_edge_ = 0;
   // Joined copy pairs, sorted; sutured copies (per copy id); the surface's rest positions.
   std::vector<std::uint64_t> joins_;
   std::vector<std::uint8_t> sutured_;
   std::vector<std::uint64_t> suture_pairs_;  // the copy pairs springs join, sorted
+  // Lagged friction: per pair in contact at the step's start, its term, normal, normal force and
+  // closest-point offset there.
+  struct FrictionPair {
+    ContactTerm term;
+    Vec3 normal, start;
+    double normal_force;
+  };
+  std::vector<FrictionPair> friction_;
   bool sutures_changed_ = false;
   Points rest_y_;
   // The Verlet list: candidates within rho_ of each other at vertex positions reference_.
@@ -198,6 +232,22 @@ void SurfaceContact::for_each_active(const Points& at, Visit&& visit) {
     const Vec3 n = p.r / p.distance;
     visit(t, kappa * barrier(p.distance, dhat), Vec3(kappa * barrier_first(p.distance, dhat) * n),
           Mat3(kappa * barrier_second(p.distance, dhat) * n * n.transpose()));
+  }
+}
+
+template <typename Visit>
+void SurfaceContact::for_each_friction(const Points& at, Visit&& visit) const {
+  // The smoothing: slips below a hundredth of the thickness per step are held as by a spring.
+  const double eps = 0.01 * settings_.thickness;
+  for (const FrictionPair& f : friction_) {
+    Vec3 u = -f.start;
+    for (int a = 0; a < f.term.count; ++a) u += f.term.coefficients[a] * at.row(f.term.nodes[a]).transpose();
+    Vec3 g;
+    const double energy = friction_energy(u, f.normal, f.normal_force, settings_.friction, eps, &g);
+    const Mat3 P = Mat3::Identity() - f.normal * f.normal.transpose();
+    const double y = (P * u).norm();
+    const double f1_over_y = y < eps ? 2 / eps - y / (eps * eps) : 1 / y;
+    visit(f.term, energy, g, Mat3(settings_.friction * f.normal_force * f1_over_y * P));
   }
 }
 
