@@ -101,7 +101,19 @@ void bind_sim(py::module_& root) {
       .def_readonly("residual", &StepReport::residual)
       .def_readonly("assemble_seconds", &StepReport::assemble_seconds)
       .def_readonly("solve_seconds", &StepReport::solve_seconds)
-      .def_readonly("line_search_seconds", &StepReport::line_search_seconds);
+      .def_readonly("line_search_seconds", &StepReport::line_search_seconds)
+      .def_readonly("contact_pairs", &StepReport::contact_pairs, "Surface pairs closer than the contact thickness at the end.")
+      .def_readonly("contact_limited_steps", &StepReport::contact_limited_steps,
+                    "Newton steps that continuous collision detection shortened.")
+      .def_readonly("contact_seconds", &StepReport::contact_seconds);
+
+  py::class_<SurfaceContactOptions>(m, "SurfaceContactOptions",
+                                    "Contact of the material surface with itself: thickness (m), stiffness (N/m), friction (0 = defaults / none).")
+      .def(py::init([](double thickness, double stiffness, double friction) { return SurfaceContactOptions{thickness, stiffness, friction}; }),
+           py::arg("thickness") = 0.0, py::arg("stiffness") = 0.0, py::arg("friction") = 0.0)
+      .def_readwrite("thickness", &SurfaceContactOptions::thickness)
+      .def_readwrite("stiffness", &SurfaceContactOptions::stiffness)
+      .def_readwrite("friction", &SurfaceContactOptions::friction);
 
   py::class_<Obstacle>(m, "Obstacle", "A solid the contact points are kept out of: Obstacle.plane, .sphere or .box.")
       .def_static("plane", [](py::handle point, py::handle normal) { return Obstacle::plane(vec3(point, "point"), vec3(normal, "normal")); },
@@ -159,6 +171,23 @@ void bind_sim(py::module_& root) {
            }, py::arg("tets"), py::arg("weights"),
            "Points kept out of the obstacles: copy ids int32 (k,) and weights (k, 4), e.g. a MaterialSurface's vertex_tet and vertex_weights.")
       .def("add_obstacle", &Simulator::add_obstacle, py::arg("obstacle"), "Keeps the contact points out of an Obstacle.")
+      .def("set_contact_surface", &Simulator::set_contact_surface, py::arg("surface"), py::arg("options") = SurfaceContactOptions{},
+           py::call_guard<py::gil_scoped_release>(),
+           "Contact of the material surface (a MaterialSurface of this mesh) with itself and between pieces: a barrier below the\n"
+           "thickness and steps stopped short of any two parts meeting. Set it again after every cut.")
+      .def("clear_contact_surface", &Simulator::clear_contact_surface, "No surface contact.")
+      .def("surface_contact", [](const Simulator& s) {
+             const Simulator::SurfaceContactState c = s.surface_contact();
+             py::dict d;
+             d["enabled"] = c.enabled;
+             d["thickness"] = c.thickness;
+             d["stiffness"] = c.stiffness;
+             d["candidates"] = c.candidates;
+             d["joined_copy_pairs"] = c.joined_copy_pairs;
+             d["rebuilds"] = c.rebuilds;
+             return d;
+           }, "What surface contact works with (a dict).")
+      .def("surface_contact_energy", &Simulator::surface_contact_energy, "The surface contact energy now (J; inf if two parts touch).")
       .def_property("contact_stiffness", &Simulator::contact_stiffness, &Simulator::set_contact_stiffness,
                     "N/m of the obstacles' penalty (by default 10 E h, h the mean edge length)")
       .def("add_spring", [](Simulator& s, Index tet_p, py::handle weights_p, Index tet_q, py::handle weights_q, double stiffness) {

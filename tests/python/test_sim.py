@@ -262,3 +262,35 @@ def test_state_setters_obstacle_boxes_and_the_rest_of_the_api():
         s.positions = V[:, :2].copy()
     with pytest.raises(tetcut.Error, match="wrong size"):
         s.positions = V[:3].copy()
+
+
+def test_surface_contact_keeps_a_falling_block_on_another():
+    # Two unit blocks, the upper 0.1 above the lower, which stands on the ground: with surface
+    # contact the upper one comes to rest on top; without, it falls through to the ground.
+    a = tetcut.make_grid([0, 0, 0], [1, 1, 1], [3, 3, 3])
+    b = tetcut.make_grid([0.05, 0.02, 1.1], [1.05, 1.02, 2.1], [3, 3, 3])
+    V = np.vstack([a[0], b[0]])
+    T = np.vstack([a[1], b[1] + len(a[0])]).astype(np.int32)
+    cutter = tetcut.Cutter(V, T)
+    surface = cutter.surface()
+
+    def lowest_of_upper(contact):
+        sim = tetcut.sim.Simulator(V, T, tetcut.sim.Material(youngs_modulus=1e6, mass_damping=4))
+        if contact:
+            sim.set_contact_surface(surface, tetcut.sim.SurfaceContactOptions(friction=0.2))
+            assert sim.surface_contact()["enabled"]
+            assert sim.surface_contact()["joined_copy_pairs"] == 0
+        sim.set_contact_points(surface.vertex_tet, surface.vertex_weights)
+        sim.add_obstacle(tetcut.sim.Obstacle.plane([0, 0, -0.1], [0, 0, 1]))
+        for _ in range(100):
+            report = sim.step(tetcut.sim.StepOptions(dt=0.01))
+        upper = V[:, 2] > 1.05
+        return sim.positions[upper, 2].min(), report
+
+    with_contact, report = lowest_of_upper(True)
+    assert with_contact > 0.85
+    assert report.contact_pairs > 0
+    without, _ = lowest_of_upper(False)
+    assert without < 0
+    with pytest.raises(tetcut.Error):
+        tetcut.sim.Simulator(V, T, tetcut.sim.Material()).set_contact_surface(surface, tetcut.sim.SurfaceContactOptions(thickness=-1))
