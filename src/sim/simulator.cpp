@@ -178,17 +178,7 @@ void Simulator::set_contact_surface(const MaterialSurface& surface, const Surfac
   std::vector<std::array<Index, 4>> copy_nodes(s.elements.size());
   for (std::size_t e = 0; e < s.elements.size(); ++e) copy_nodes[e] = s.elements[e].nodes;
   if (s.contact_changed.size() != s.elements.size()) s.contact_changed.assign(s.elements.size(), 1);
-  s.surface_contact_options = options;
-  // The defaults follow the surface (its mean edge length): a first pass without settings finds it.
-  s.surface_contact.set_settings({});
-  s.surface_contact.set_surface(surface, copy_nodes, s.rest, s.x, s.contact_changed);
-  const double edge = s.surface_contact.mean_edge_length();
-  detail::SurfaceContact::Settings settings;
-  settings.thickness = options.thickness > 0 ? options.thickness : 0.1 * edge;
-  settings.stiffness = options.stiffness > 0 ? options.stiffness : s.material.youngs_modulus * edge;
-  settings.friction = options.friction;
-  s.surface_contact.set_settings(settings);
-  s.surface_contact.set_surface(surface, copy_nodes, s.rest, s.x, s.contact_changed);
+  s.surface_contact.set_surface(surface, copy_nodes, s.rest, s.x, s.contact_changed, options, s.material.youngs_modulus);
   std::fill(s.contact_changed.begin(), s.contact_changed.end(), 0);
 }
 

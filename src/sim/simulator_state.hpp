@@ -40,7 +40,6 @@ struct SimulatorState {
   // list is a cache of the positions it was last asked about. `contact_changed`: per copy,
   // whether a cut changed it since the surface was last set.
   mutable detail::SurfaceContact surface_contact;
-  SurfaceContactOptions surface_contact_options;
   std::vector<std::uint8_t> contact_changed;
   Points x, v;
   Eigen::VectorXd mass;

@@ -146,7 +146,8 @@ bool SurfaceContact::rest_neighbours(Index a, Index b) const {
 }
 
 void SurfaceContact::set_surface(const MaterialSurface& surface, std::span<const std::array<Index, 4>> copy_nodes, const Points& rest,
-                                 const Points& now, std::span<const std::uint8_t> changed) {
+                                 const Points& now, std::span<const std::uint8_t> changed, const SurfaceContactOptions& options,
+                                 double youngs_modulus) {
   node_rest_ = rest;
   clear_surface();
   const TriangleSurface& s = surface.surface;
@@ -182,6 +183,10 @@ void SurfaceContact::set_surface(const MaterialSurface& surface, std::span<const
     length += (s.vertices.row(a) - s.vertices.row(b)).norm();
   }
   mean_edge_ = edges_.empty() ? 0.0 : length / static_cast<double>(edges_.size());
+  // The defaults follow the surface (SurfaceContactOptions).
+  settings_.thickness = options.thickness > 0 ? options.thickness : 0.1 * mean_edge_;
+  settings_.stiffness = options.stiffness > 0 ? options.stiffness : youngs_modulus * mean_edge_;
+  settings_.friction = options.friction;
   rest_y_ = s.vertices;
   group_primitives();
   if (!enabled() || !(settings_.thickness > 0)) return;
@@ -194,7 +199,6 @@ void SurfaceContact::set_surface(const MaterialSurface& surface, std::span<const
   });
   cover(now, 0);
   measure();
-  const Points& y_rest = rest_y_;
   const double dhat = settings_.thickness;
   for (std::size_t k = 0; k < candidates_.size(); ++k) {
     const Candidate& c = candidates_[k];
@@ -206,7 +210,7 @@ void SurfaceContact::set_surface(const MaterialSurface& surface, std::span<const
     // holds them apart from the start. Only pairs touching now are joined whatever they are
     // (at distance 0 the barrier is infinite).
     if (proximities_[k].distance > 0 &&
-        (!(proximity(c, y_rest).distance < dhat) || !rest_neighbours(static_cast<Index>(c.copies >> 32), static_cast<Index>(c.copies & 0xffffffffu)))) {
+        (!(proximity(c, rest_y_).distance < dhat) || !rest_neighbours(static_cast<Index>(c.copies >> 32), static_cast<Index>(c.copies & 0xffffffffu)))) {
       continue;
     }
     joins_.push_back(c.copies);
@@ -319,23 +323,8 @@ void SurfaceContact::rebuild(double rho) {
   rho_ = rho;
   ++rebuilds_;
   const Points& y = reference_;
-  // Boxes of each copy's primitives, in a hierarchy built once per surface and refitted.
-  const auto G = static_cast<Index>(group_copy_.size());
-  std::vector<spatial::Aabb> boxes(static_cast<std::size_t>(G));
-  for_chunks(G, kNodeChunk, [&](Index begin, Index end, Index) {
-    for (Index g = begin; g < end; ++g) {
-      spatial::Aabb& box = boxes[static_cast<std::size_t>(g)];
-      for (Index k = vertex_start_[g]; k < vertex_start_[g + 1]; ++k) box.extend(Vec3(y.row(group_vertices_[k]).transpose()));
-      for (Index k = triangle_start_[g]; k < triangle_start_[g + 1]; ++k) {
-        for (const Index v : triangles_[static_cast<std::size_t>(group_triangles_[k])]) box.extend(Vec3(y.row(v).transpose()));
-      }
-      for (Index k = edge_start_[g]; k < edge_start_[g + 1]; ++k) {
-        for (const Index v : edges_[static_cast<std::size_t>(group_edges_[k])]) box.extend(Vec3(y.row(v).transpose()));
-      }
-    }
-  });
-  // And of every triangle and edge: a pair's boxes are compared before its distance is measured
-  // (most pairs of nearby copies are far apart, and boxes cost a few comparisons).
+  // Boxes of every triangle and edge: a pair's boxes are compared before its distance is
+  // measured (most pairs of nearby copies are far apart, and boxes cost a few comparisons).
   triangle_boxes_.assign(triangles_.size(), spatial::Aabb{});
   edge_boxes_.assign(edges_.size(), spatial::Aabb{});
   for_chunks(static_cast<Index>(triangles_.size()), kNodeChunk, [&](Index begin, Index end, Index) {
@@ -346,6 +335,17 @@ void SurfaceContact::rebuild(double rho) {
   for_chunks(static_cast<Index>(edges_.size()), kNodeChunk, [&](Index begin, Index end, Index) {
     for (Index e = begin; e < end; ++e) {
       for (const Index v : edges_[static_cast<std::size_t>(e)]) edge_boxes_[static_cast<std::size_t>(e)].extend(Vec3(y.row(v).transpose()));
+    }
+  });
+  // And of each copy's primitives, in a hierarchy built once per surface and refitted: its
+  // vertices and triangles (an edge is a side of a triangle the same copy owns).
+  const auto G = static_cast<Index>(group_copy_.size());
+  std::vector<spatial::Aabb> boxes(static_cast<std::size_t>(G));
+  for_chunks(G, kNodeChunk, [&](Index begin, Index end, Index) {
+    for (Index g = begin; g < end; ++g) {
+      spatial::Aabb& box = boxes[static_cast<std::size_t>(g)];
+      for (Index k = vertex_start_[g]; k < vertex_start_[g + 1]; ++k) box.extend(Vec3(y.row(group_vertices_[k]).transpose()));
+      for (Index k = triangle_start_[g]; k < triangle_start_[g + 1]; ++k) box.extend(triangle_boxes_[static_cast<std::size_t>(group_triangles_[k])]);
     }
   });
   if (!tree_built_) {

@@ -99,14 +99,14 @@ class SurfaceContact {
 
   bool enabled() const { return !triangles_.empty(); }
   const Settings& settings() const { return settings_; }
-  void set_settings(const Settings& settings) { settings_ = settings; }
 
   /// Takes the surface (rest positions, its vertices embedded in the copies with `copy_nodes`)
   /// with the nodes' positions in the material (`rest`) and `now`; `changed`, per copy, whether
   /// the cuts since the last surface changed it (its joins are recomputed; the others' are
-  /// kept). O(F log F + candidates).
+  /// kept). The settings are `options`, their zeros replaced by the defaults from the surface's
+  /// mean edge length (and `youngs_modulus` for the stiffness). O(F log F + candidates).
   void set_surface(const MaterialSurface& surface, std::span<const std::array<Index, 4>> copy_nodes, const Points& rest, const Points& now,
-                   std::span<const std::uint8_t> changed);
+                   std::span<const std::uint8_t> changed, const SurfaceContactOptions& options, double youngs_modulus);
   /// Drops the surface (a cut changes it; set it again), keeping the joins.
   void clear_surface();
   /// Forgets everything, joins included.

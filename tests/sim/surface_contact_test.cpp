@@ -7,6 +7,7 @@
 
 #include <tetcut/collision.hpp>
 #include <tetcut/cutter.hpp>
+#include <tetcut/cutting_surfaces.hpp>
 #include <tetcut/generators.hpp>
 #include <tetcut/sim.hpp>
 
@@ -43,19 +44,11 @@ Index crossings(const MaterialSurface& surface, const std::vector<std::array<Ind
   return count_surface_intersections(surface, copies, at, 1e-6 * diagonal).intersecting_pairs;
 }
 
-std::vector<std::array<Index, 4>> copies_of(const TetMesh& mesh) {
-  std::vector<std::array<Index, 4>> out(static_cast<std::size_t>(mesh.num_tets()));
-  for (Index t = 0; t < mesh.num_tets(); ++t) {
-    for (int k = 0; k < 4; ++k) out[t][k] = mesh.tets()(t, k);
-  }
-  return out;
-}
-
 TEST(SurfaceContact, GradientMatchesFiniteDifferences) {
   const TetMesh mesh = two_blocks(0.05);
   Cutter cutter(mesh);
   const MaterialSurface surface = cutter.surface();
-  const auto copies = copies_of(mesh);
+  const auto& copies = cutter.tet_nodes();
   // The upper block lowered to within a third of the thickness, and every node jiggled so that
   // pairs meet in all regions (faces, edges, corners).
   const double dhat = 0.02;
@@ -67,9 +60,11 @@ TEST(SurfaceContact, GradientMatchesFiniteDifferences) {
     for (int k = 0; k < 3; ++k) x(v, k) += jiggle(random);
   }
   sim::detail::SurfaceContact contact;
-  contact.set_settings({dhat, 1e3});
   const std::vector<std::uint8_t> changed(copies.size(), 0);  // nothing was cut: no joins
-  contact.set_surface(surface, copies, mesh.rest(), x, changed);
+  sim::SurfaceContactOptions options;
+  options.thickness = dhat;
+  options.stiffness = 1e3;
+  contact.set_surface(surface, copies, mesh.rest(), x, changed, options, soft().youngs_modulus);
   ASSERT_EQ(contact.num_joins(), 0);
   const auto energy_and_gradient = [&](const Points& at, std::vector<double>* gradient) {
     double energy = 0;
@@ -115,7 +110,7 @@ TEST(SurfaceContact, CollidingBlocksDoNotInterpenetrateAndKeepTheirMomentum) {
   const TetMesh mesh = two_blocks(0.05);
   Cutter cutter(mesh);
   const MaterialSurface surface = cutter.surface();
-  const auto copies = copies_of(mesh);
+  const auto& copies = cutter.tet_nodes();
   sim::Simulator sim(mesh, soft());
   sim.set_contact_surface(surface);
   const sim::Simulator::SurfaceContactState state = sim.surface_contact();
@@ -167,7 +162,7 @@ TEST(SurfaceContact, BlocksDroppedOnEachOtherComeToRest) {
   const TetMesh mesh = two_blocks(0.1);
   Cutter cutter(mesh);
   const MaterialSurface surface = cutter.surface();
-  const auto copies = copies_of(mesh);
+  const auto& copies = cutter.tet_nodes();
   sim::Material material = soft();
   material.youngs_modulus = 1e6;
   material.mass_damping = 4;
@@ -202,17 +197,11 @@ TEST(SurfaceContact, BlocksDroppedOnEachOtherComeToRest) {
 TEST(SurfaceContact, HalvesOfACutBlockPartAndMeetAgainWithoutCrossing) {
   const TetMesh mesh = make_grid({Vec3(0, 0, 0), Vec3(1, 1, 1)}, {4, 4, 4}, 5);
   Cutter cutter(mesh);
-  // A plane x = 0.43 through the whole block.
-  TriangleSurface blade;
-  blade.vertices.resize(4, 3);
-  blade.vertices << 0.43, -1, -1, 0.43, 2, -1, 0.43, 2, 2, 0.43, -1, 2;
-  blade.triangles.resize(2, 3);
-  blade.triangles << 0, 1, 2, 0, 2, 3;
-  cutter.cut(blade);
+  cutter.cut(plane_square(Vec3(0.43, 0.5, 0.5), Vec3(1, 0, 0), 3));  // x = 0.43 through the whole block
   const CutResult result = cutter.result();
   ASSERT_EQ(result.mesh.num_pieces(), 2);
   const MaterialSurface& surface = result.surface;
-  const auto copies = copies_of(result.mesh.mesh);
+  const auto& copies = cutter.tet_nodes();
   sim::Simulator sim(result.mesh.mesh, soft(), result.mesh.material_fractions());
   sim.set_contact_surface(surface);
   EXPECT_GT(sim.surface_contact().joined_copy_pairs, 0);  // the fresh cut's two sides touch
@@ -302,7 +291,7 @@ double slip_after(double friction) {
   sim::StepOptions step;
   step.dt = 0.01;
   // Gravity presses the upper block onto the lower one.
-  const auto copies = copies_of(mesh);
+  const auto& copies = cutter.tet_nodes();
   for (int s = 0; s < 40; ++s) {
     sim.step(step);
     EXPECT_EQ(crossings(surface, copies, sim), 0) << "friction " << friction << ", step " << s;
