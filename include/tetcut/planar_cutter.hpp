@@ -1,0 +1,148 @@
+#pragma once
+// The two-dimensional version of the cutter (the paper's Figure 1): a triangle mesh lying in its
+// rest plane, cut by polylines.
+//
+//   tetcut::PlanarCutter cutter(mesh);        // triangles counter-clockwise in the (x, y) plane
+//   cutter.cut(polylines);                    // any number of batches
+//   const tetcut::PlanarCutResult r = cutter.result();
+//   r.mesh.mesh        // one copy of a triangle per material component, sharing nodes across edges
+//   r.boundary         // the material boundary, embedded in the copies
+//
+// Polylines may be open or closed, cross themselves and each other, run through vertices and
+// along edges, overlap and repeat, and end inside a triangle. The guarantees are the 3D cutter's,
+// from the same exact machinery: points are meetings of lines (stored as planes through the z
+// axis in the intersection registry, with the rest plane as the third plane), and every decision
+// is a filtered side test with a GMP fallback. Only triangles a batch touches change; node and
+// copy ids, once given, stay.
+
+#include <tetcut/types.hpp>
+
+#include <cstdint>
+#include <memory>
+#include <span>
+#include <vector>
+
+namespace tetcut {
+
+/// |V| x 2 rest coordinates in the plane.
+using Points2 = Eigen::Matrix<double, Eigen::Dynamic, 2, Eigen::RowMajor>;
+
+/// A triangle mesh in its rest plane. Every triangle must be counter-clockwise (positive area),
+/// and an edge may be shared by at most two triangles.
+struct PlanarMesh {
+  Points2 rest;
+  Triangles triangles;
+
+  Index num_nodes() const { return static_cast<Index>(rest.rows()); }
+  Index num_triangles() const { return static_cast<Index>(triangles.rows()); }
+};
+
+/// A cut: the segments between consecutive points, and from the last back to the first when
+/// closed. Repeated points give zero-length segments, which are skipped and reported.
+struct Polyline {
+  Points2 points;
+  bool closed = false;
+
+  Index num_segments() const {
+    const Index n = static_cast<Index>(points.rows());
+    return n < 2 ? 0 : (closed && n > 2 ? n : n - 1);
+  }
+};
+
+/// The cut mesh: each material component of an input triangle has its own copy of the triangle,
+/// with the triangle's rest positions; copies whose shared edge holds common material share that
+/// edge's nodes. Input node n keeps id n and duplicated nodes follow; triangle t's first copy is t.
+struct PlanarCutMesh {
+  PlanarMesh mesh;
+  std::vector<Index> node_parent;              ///< per node: the input node it copies
+  std::vector<Index> triangle_parent;          ///< per copy: the input triangle it copies
+  std::vector<Index> triangle_piece;           ///< per copy: its piece (pieces by area, largest first)
+  std::vector<double> triangle_material_area;  ///< per copy: the area of the material it holds
+  std::vector<double> piece_areas;             ///< per piece, largest first
+
+  Index num_pieces() const { return static_cast<Index>(piece_areas.size()); }
+  /// Per copy: its material area over its triangle's rest area (what mass and stiffness scale by).
+  std::vector<double> material_fractions() const;
+};
+
+/// The boundary of the material: both sides of every cut and the uncut outer boundary, as
+/// segments with the material on their left. Each vertex is embedded in one triangle copy by
+/// barycentric weights, so it follows the cloth as it deforms.
+struct MaterialBoundary {
+  Points2 rest;   ///< vertex rest positions
+  Edges segments; ///< |S| x 2 vertex ids, material on the left going from the first to the second
+  /// Per vertex: the copy it is embedded in and its weights (|V| x 3, summing to one).
+  std::vector<Index> vertex_triangle;
+  Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor> vertex_weights;
+  /// Per segment: the cut segment it lies on (numbered over all batches, in order), or -1 - e for
+  /// mesh edge e on the outer boundary (edges numbered as PlanarCutter::edge_nodes gives them).
+  std::vector<std::int64_t> segment_source;
+  std::vector<Index> segment_triangle;  ///< per segment: the copy whose material it bounds
+
+  Index num_vertices() const { return static_cast<Index>(rest.rows()); }
+  Index num_segments() const { return static_cast<Index>(segments.rows()); }
+  /// Vertex positions (|V| x 3) for positions of the cut mesh's nodes (|nodes| x 3, e.g. deformed).
+  Points positions(const PlanarCutMesh& mesh, const Points& nodes) const;
+};
+
+struct PlanarCutResult {
+  PlanarCutMesh mesh;
+  MaterialBoundary boundary;
+};
+
+/// What one batch did, and what a simulator needs to carry its state over (see CutBatchReport).
+struct PlanarCutReport {
+  Index segments = 0;                ///< segments in the batch
+  std::vector<Index> degenerate;     ///< zero-length segments (batch numbering), skipped
+  std::vector<Index> touched;        ///< input triangles whose material changed, ascending
+  Index first_new_node = 0;          ///< nodes from here on are new ...
+  std::vector<Index> new_node_source;     ///< ... split from these nodes
+  Index first_new_triangle = 0;      ///< copies from here on are new ...
+  std::vector<Index> new_triangle_source; ///< ... split from these copies
+  std::vector<Index> changed_triangles;   ///< older copies whose nodes changed, ascending
+};
+
+class PlanarCutter {
+ public:
+  /// Takes the mesh to cut; each triangle starts as its own copy over the input nodes. Throws
+  /// Error(kInvalidInput) naming the triangle or node for a non-finite coordinate, an id out of
+  /// range, a triangle that is not counter-clockwise (zero or negative area, decided exactly) or an
+  /// edge shared by more than two triangles. O(T log T).
+  explicit PlanarCutter(PlanarMesh mesh);
+  ~PlanarCutter();
+  PlanarCutter(PlanarCutter&&) noexcept;
+  PlanarCutter& operator=(PlanarCutter&&) noexcept;
+
+  /// Cuts by a batch of polylines in rest coordinates. Throws Error(kInvalidInput) naming the
+  /// polyline and point when a coordinate is not finite, changing nothing. Cost: proportional to
+  /// the triangles the batch touches and the cells already in them, plus O(log T) per segment,
+  /// plus O(T) to recount the pieces.
+  PlanarCutReport cut(std::span<const Polyline> batch);
+
+  /// Maps points on the mesh in its deformed positions (|P| x 3, e.g. a blade drawn on the cloth)
+  /// to rest coordinates: each through the affine motion of the triangle copy nearest to it (in
+  /// world space, over copies that are not degenerate in `nodes`). Geometry, not topology: the
+  /// result is rounded, and cutting along it is then a rest-space cut, so neighbouring triangles
+  /// agree exactly. O(copies) per point.
+  Points2 to_rest(const Points& world, const Points& nodes) const;
+
+  PlanarCutResult result() const;
+
+  Index num_nodes() const;
+  Index num_triangles() const;  ///< copies
+  /// Per copy, its three nodes in its input triangle's order.
+  const std::vector<std::array<Index, 3>>& triangle_nodes() const;
+  const std::vector<Index>& node_parent() const;
+  const std::vector<Index>& triangle_parent() const;
+  /// Input mesh edges (node pairs, smaller id first), as numbered in MaterialBoundary.
+  const std::vector<std::array<Index, 2>>& edge_nodes() const;
+  const PlanarMesh& input() const;
+  /// Cells (convex polygons of the arrangement) over all triangles: for measurements and tests.
+  Index num_cells() const;
+
+ private:
+  struct State;
+  std::unique_ptr<State> state_;
+};
+
+}  // namespace tetcut
