@@ -9,7 +9,7 @@ cmake --preset release > /dev/null
 cmake --build --preset release -j "$(nproc)"
 out=${1:-out/examples}
 mkdir -p "$out"
-for example in cut_a_cube paper_figures scalpel lips; do
+for example in cut_a_cube paper_figures scalpel lips cloth_spiral; do
   ./build/release/examples/example_$example "$out"
 done
 for scene in examples/*.json; do

@@ -8,8 +8,9 @@
 //
 // Energies: a St. Venant-Kirchhoff membrane per triangle copy and a quadratic bending hinge per
 // edge two copies share (src/sim/cloth_energy.hpp), both scaled by the copies' material
-// fractions; gravity; pins. Each step minimises the incremental potential by Newton's method with
-// projected element Hessians, the simulator's block matrix and preconditioned conjugate gradients,
+// fractions; gravity; pins. Each step minimises the incremental potential by Newton's method: the
+// Hessian assembled in the simulator's block matrix, solved by a sparse LDL^T, the membranes'
+// Hessians projected to positive semi-definite where the whole system is not positive definite,
 // and a backtracking line search.
 
 #include <tetcut/planar_cutter.hpp>
@@ -33,15 +34,16 @@ struct ClothMaterial {
 struct ClothStepOptions {
   double dt = 1.0 / 60;
   Vec3 gravity = Vec3(0, 0, -9.81);
-  int max_newton_iterations = 20;
+  int max_newton_iterations = 30;
   /// Converged when the largest free node's Newton correction estimate, |g| dt^2 / m, is below
   /// this times the mean rest edge length.
-  double tolerance = 1e-6;
+  double tolerance = 1e-5;
 };
 
 struct ClothStepReport {
   int newton_iterations = 0;
-  int cg_iterations = 0;
+  /// Iterations whose true Hessian was indefinite, so that the projected one was used.
+  int projected_iterations = 0;
   double residual = 0;  ///< the convergence measure at the end, relative to the mean edge length
   bool converged = false;
   double seconds = 0;

@@ -6,7 +6,7 @@
 //   cutter.cut(polylines);                    // any number of batches
 //   const tetcut::PlanarCutResult r = cutter.result();
 //   r.mesh.mesh        // one copy of a triangle per material component, sharing nodes across edges
-//   r.boundary         // the material boundary, embedded in the copies
+//   r.material         // the material (cells and boundary), embedded in the copies
 //
 // Polylines may be open or closed, cross themselves and each other, run through vertices and
 // along edges, overlap and repeat, and end inside a triangle. The guarantees are the 3D cutter's,
@@ -65,21 +65,28 @@ struct PlanarCutMesh {
   std::vector<double> material_fractions() const;
 };
 
-/// The boundary of the material: both sides of every cut and the uncut outer boundary, as
-/// segments with the material on their left. Each vertex is embedded in one triangle copy by
-/// barycentric weights, so it follows the cloth as it deforms.
-struct MaterialBoundary {
-  Points2 rest;   ///< vertex rest positions
-  Edges segments; ///< |S| x 2 vertex ids, material on the left going from the first to the second
+/// The material, embedded in the copies: the cells of the arrangement as triangles (fans), and
+/// its boundary (both sides of every cut and the uncut outer boundary) as segments with the
+/// material on their left. Triangles and segments share vertices; each vertex is embedded in one
+/// triangle copy by barycentric weights, so it follows the cloth as it deforms. A vertex is shared
+/// exactly by the copies that move it alike: both sides of a cut have their own.
+struct PlanarMaterial {
+  Points2 rest;  ///< vertex rest positions
   /// Per vertex: the copy it is embedded in and its weights (|V| x 3, summing to one).
-  std::vector<Index> vertex_triangle;
+  std::vector<Index> vertex_copy;
   Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor> vertex_weights;
+  /// The material region, counter-clockwise, and per triangle the copy it belongs to.
+  Triangles triangles;
+  std::vector<Index> triangle_copy;
+  /// |S| x 2 vertex ids, material on the left going from the first to the second.
+  Edges segments;
   /// Per segment: the cut segment it lies on (numbered over all batches, in order), or -1 - e for
   /// mesh edge e on the outer boundary (edges numbered as PlanarCutter::edge_nodes gives them).
   std::vector<std::int64_t> segment_source;
-  std::vector<Index> segment_triangle;  ///< per segment: the copy whose material it bounds
+  std::vector<Index> segment_copy;  ///< per segment: the copy whose material it bounds
 
   Index num_vertices() const { return static_cast<Index>(rest.rows()); }
+  Index num_triangles() const { return static_cast<Index>(triangles.rows()); }
   Index num_segments() const { return static_cast<Index>(segments.rows()); }
   /// Vertex positions (|V| x 3) for positions of the cut mesh's nodes (|nodes| x 3, e.g. deformed).
   Points positions(const PlanarCutMesh& mesh, const Points& nodes) const;
@@ -87,7 +94,7 @@ struct MaterialBoundary {
 
 struct PlanarCutResult {
   PlanarCutMesh mesh;
-  MaterialBoundary boundary;
+  PlanarMaterial material;
 };
 
 /// What one batch did, and what a simulator needs to carry its state over (see CutBatchReport).
@@ -134,7 +141,7 @@ class PlanarCutter {
   const std::vector<std::array<Index, 3>>& triangle_nodes() const;
   const std::vector<Index>& node_parent() const;
   const std::vector<Index>& triangle_parent() const;
-  /// Input mesh edges (node pairs, smaller id first), as numbered in MaterialBoundary.
+  /// Input mesh edges (node pairs, smaller id first), as numbered in PlanarMaterial.
   const std::vector<std::array<Index, 2>>& edge_nodes() const;
   const PlanarMesh& input() const;
   /// Cells (convex polygons of the arrangement) over all triangles: for measurements and tests.

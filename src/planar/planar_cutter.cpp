@@ -497,33 +497,28 @@ PlanarCutResult PlanarCutter::result() const {
   m.piece_areas.resize(order.size());
   for (std::size_t i = 0; i < order.size(); ++i) m.piece_areas[i] = class_area[order[i]];
 
-  // The boundary. A vertex is one per point and per set of nodes its position depends on: a node
+  // The material. A vertex is one per point and per set of nodes its position depends on: a node
   // is itself; a point inside a mesh edge follows the copy's two nodes of that edge; a point inside
   // a triangle follows the copy. So both sides of a cut get their own vertices, and copies that move
   // together share them.
-  MaterialBoundary& b = r.boundary;
+  PlanarMaterial& material = r.material;
   std::map<std::array<Index, 4>, Index> vertex_of;
   std::vector<Eigen::Vector2d> rest;
   std::vector<Index> vertex_copy;
   std::vector<Eigen::Vector3d> weights;
-  std::vector<std::array<Index, 2>> segments;
   const auto& registry = s.geometry.registry;
   auto vertex = [&](VertexId v, Index copy) {
     const Index t = s.copy_triangle[copy];
-    std::array<Index, 4> key{};
-    const Index node = registry.vertex(v).node;
-    if (node >= 0) {
+    auto corner_node = [&](Index input_node) {
       int k = 0;
-      while (s.input.triangles(t, k) != node) ++k;
-      key = {0, s.copy_nodes[copy][k], -1, -1};
+      while (s.input.triangles(t, k) != input_node) ++k;
+      return s.copy_nodes[copy][k];
+    };
+    std::array<Index, 4> key{};
+    if (const Index node = registry.vertex(v).node; node >= 0) {
+      key = {0, corner_node(node), -1, -1};
     } else if (const Index e = s.geometry.vertex_edge[v]; e >= 0) {
-      std::array<Index, 2> ends{};
-      for (int j = 0; j < 2; ++j) {
-        int k = 0;
-        while (s.input.triangles(t, k) != s.edges[e][j]) ++k;
-        ends[j] = s.copy_nodes[copy][k];
-      }
-      key = {1, v, ends[0], ends[1]};
+      key = {1, v, corner_node(s.edges[e][0]), corner_node(s.edges[e][1])};
     } else {
       key = {2, v, copy, -1};
     }
@@ -534,59 +529,81 @@ PlanarCutResult PlanarCutter::result() const {
       vertex_copy.push_back(copy);
       // Barycentric weights in the rest triangle (rounded; geometry only).
       const Eigen::Vector2d a = s.input.rest.row(s.input.triangles(t, 0)).transpose(),
-                            bb = s.input.rest.row(s.input.triangles(t, 1)).transpose(),
+                            b = s.input.rest.row(s.input.triangles(t, 1)).transpose(),
                             c = s.input.rest.row(s.input.triangles(t, 2)).transpose();
       const Eigen::Vector2d p(x.x(), x.y());
       auto cross = [](const Eigen::Vector2d& u, const Eigen::Vector2d& w) { return u.x() * w.y() - u.y() * w.x(); };
-      const double area = cross(bb - a, c - a);
-      const double w1 = cross(p - a, c - a) / area, w2 = cross(bb - a, p - a) / area;
+      const double area = cross(b - a, c - a);
+      const double w1 = cross(p - a, c - a) / area, w2 = cross(b - a, p - a) / area;
       weights.emplace_back(1 - w1 - w2, w1, w2);
     }
     return it->second;
   };
+  std::vector<std::array<Index, 3>> triangles;
+  std::vector<Index> triangle_copy;
+  std::vector<std::array<Index, 2>> segments;
   std::vector<std::int64_t> source;
   std::vector<Index> segment_copy;
   auto boundary_edge = [&](Index e) { return s.edge_sides[e][1][0] < 0; };
   for (Index t = 0; t < s.input.num_triangles(); ++t) {
     if (!s.arrangements[t]) {
+      const Index copy = s.triangle_copies[t][0];
+      std::array<Index, 3> corners{};
+      for (int k = 0; k < 3; ++k) corners[k] = vertex(s.geometry.node_vertex[s.input.triangles(t, k)], copy);
+      triangles.push_back(corners);
+      triangle_copy.push_back(copy);
       for (int k = 0; k < 3; ++k) {
         const Index e = s.triangle_edges[t][k];
         if (!boundary_edge(e)) continue;
-        const Index copy = s.triangle_copies[t][0];
-        segments.push_back({vertex(s.geometry.node_vertex[s.input.triangles(t, k)], copy),
-                            vertex(s.geometry.node_vertex[s.input.triangles(t, (k + 1) % 3)], copy)});
+        segments.push_back({corners[k], corners[(k + 1) % 3]});
         source.push_back(-1 - e);
         segment_copy.push_back(copy);
       }
       continue;
     }
     const auto& arrangement = *s.arrangements[t];
+    for (int f = 0; f < static_cast<int>(arrangement.faces().size()); ++f) {
+      // A fan from the first corner; cells are convex, and collinear corners give zero-area
+      // triangles, which renderers ignore and which keep every boundary vertex in the fan.
+      const Index copy = arrangement.faces()[f].label;
+      const std::vector<VertexId> corners = arrangement.face_corners(f);
+      const Index first = vertex(corners[0], copy);
+      for (std::size_t i = 1; i + 1 < corners.size(); ++i) {
+        triangles.push_back({first, vertex(corners[i], copy), vertex(corners[i + 1], copy)});
+        triangle_copy.push_back(copy);
+      }
+    }
     const auto& half_edges = arrangement.half_edges();
     for (const planar::HalfEdge& h : half_edges) {
       if (h.face < 0) continue;
       const bool outer = h.side >= 0 && boundary_edge(s.triangle_edges[t][h.side]);
       if (h.covering < 0 && !outer) continue;
-      const std::int64_t from = h.covering >= 0 ? h.covering : -1 - s.triangle_edges[t][h.side];
       const Index copy = arrangement.faces()[h.face].label;
       segments.push_back({vertex(h.origin, copy), vertex(half_edges[h.twin].origin, copy)});
-      source.push_back(from);
+      source.push_back(h.covering >= 0 ? h.covering : -1 - s.triangle_edges[t][h.side]);
       segment_copy.push_back(copy);
     }
   }
-  b.rest.resize(static_cast<Index>(rest.size()), 2);
-  b.vertex_weights.resize(static_cast<Index>(rest.size()), 3);
-  for (std::size_t i = 0; i < rest.size(); ++i) {
-    b.rest.row(static_cast<Index>(i)) = rest[i].transpose();
-    b.vertex_weights.row(static_cast<Index>(i)) = weights[i].transpose();
+  const auto vertices = static_cast<Index>(rest.size());
+  material.rest.resize(vertices, 2);
+  material.vertex_weights.resize(vertices, 3);
+  for (Index i = 0; i < vertices; ++i) {
+    material.rest.row(i) = rest[i].transpose();
+    material.vertex_weights.row(i) = weights[i].transpose();
   }
-  b.vertex_triangle = std::move(vertex_copy);
-  b.segments.resize(static_cast<Index>(segments.size()), 2);
+  material.vertex_copy = std::move(vertex_copy);
+  material.triangles.resize(static_cast<Index>(triangles.size()), 3);
+  for (std::size_t i = 0; i < triangles.size(); ++i) {
+    for (int k = 0; k < 3; ++k) material.triangles(static_cast<Index>(i), k) = triangles[i][k];
+  }
+  material.triangle_copy = std::move(triangle_copy);
+  material.segments.resize(static_cast<Index>(segments.size()), 2);
   for (std::size_t i = 0; i < segments.size(); ++i) {
-    b.segments(static_cast<Index>(i), 0) = segments[i][0];
-    b.segments(static_cast<Index>(i), 1) = segments[i][1];
+    material.segments(static_cast<Index>(i), 0) = segments[i][0];
+    material.segments(static_cast<Index>(i), 1) = segments[i][1];
   }
-  b.segment_source = std::move(source);
-  b.segment_triangle = std::move(segment_copy);
+  material.segment_source = std::move(source);
+  material.segment_copy = std::move(segment_copy);
   return r;
 }
 
@@ -616,10 +633,10 @@ std::vector<double> PlanarCutMesh::material_fractions() const {
   return fractions;
 }
 
-Points MaterialBoundary::positions(const PlanarCutMesh& mesh, const Points& nodes) const {
+Points PlanarMaterial::positions(const PlanarCutMesh& mesh, const Points& nodes) const {
   Points out(num_vertices(), 3);
   for (Index v = 0; v < num_vertices(); ++v) {
-    const Index c = vertex_triangle[v];
+    const Index c = vertex_copy[v];
     out.row(v).setZero();
     for (int k = 0; k < 3; ++k) out.row(v) += vertex_weights(v, k) * nodes.row(mesh.mesh.triangles(c, k));
   }

@@ -2,6 +2,9 @@
 
 #include <tbb/enumerable_thread_specific.h>
 
+#include <Eigen/SparseCholesky>
+
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <type_traits>
@@ -325,6 +328,77 @@ ConjugateGradientReport conjugate_gradients(const BlockSparseMatrix& a, std::spa
     });
   }
   return report;
+}
+
+struct DirectSolver::Factor {
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt;
+  // What the analysis was made for: the free nodes and the pattern's size.
+  std::vector<std::uint8_t> free;
+  Index blocks = -1, rows = -1;
+  std::vector<Eigen::Triplet<double>> triplets;
+};
+
+DirectSolver::DirectSolver() : factor_(std::make_unique<Factor>()) {}
+DirectSolver::~DirectSolver() = default;
+
+bool DirectSolver::solve(const BlockSparseMatrix& a, std::span<const std::uint8_t> free, std::span<const double> b,
+                         std::span<double> d) {
+  Factor& f = *factor_;
+  const Index n = a.num_rows();
+  std::vector<Index> dof(static_cast<std::size_t>(n), -1);
+  Index count = 0;
+  for (Index v = 0; v < n; ++v) {
+    if (free[v]) dof[v] = count++;
+  }
+  // Every block of the pattern goes in, zero or not, so that the sparse pattern depends on the
+  // block pattern and the free nodes only.
+  f.triplets.clear();
+  for (Index row = 0; row < n; ++row) {
+    if (dof[row] < 0) continue;
+    a.for_each_block(row, [&](Index k, Index column) {
+      if (dof[column] < 0) return;
+      double block[9];
+      a.read(k, block);
+      for (int i = 0; i < 3; ++i) {
+        for (int j = 0; j < 3; ++j) f.triplets.emplace_back(3 * dof[row] + i, 3 * dof[column] + j, block[3 * i + j]);
+      }
+    });
+  }
+  Eigen::SparseMatrix<double> matrix(3 * count, 3 * count);
+  matrix.setFromTriplets(f.triplets.begin(), f.triplets.end());
+  const bool same = f.rows == n && f.blocks == a.num_blocks() && std::equal(free.begin(), free.end(), f.free.begin(), f.free.end());
+  if (!same) {
+    f.ldlt.analyzePattern(matrix);
+    f.rows = n;
+    f.blocks = a.num_blocks();
+    f.free.assign(free.begin(), free.end());
+  }
+  f.ldlt.factorize(matrix);
+  if (f.ldlt.info() != Eigen::Success) {
+    f.rows = -1;  // analyse afresh next time
+    return false;
+  }
+  Eigen::VectorXd rhs(3 * count);
+  for (Index v = 0; v < n; ++v) {
+    if (dof[v] >= 0) {
+      for (int k = 0; k < 3; ++k) rhs[3 * dof[v] + k] = b[3 * v + k];
+    }
+  }
+  const Eigen::VectorXd x = f.ldlt.solve(rhs);
+  if (f.ldlt.info() != Eigen::Success) return false;
+  for (Index v = 0; v < n; ++v) {
+    for (int k = 0; k < 3; ++k) d[3 * v + k] = dof[v] >= 0 ? x[3 * dof[v] + k] : 0.0;
+  }
+  return true;
+}
+
+bool DirectSolver::positive_definite() const {
+  return factor_->rows >= 0 && (factor_->ldlt.vectorD().size() == 0 || factor_->ldlt.vectorD().minCoeff() > 0);
+}
+
+bool solve_direct(const BlockSparseMatrix& a, std::span<const std::uint8_t> free, std::span<const double> b, std::span<double> d) {
+  DirectSolver solver;
+  return solver.solve(a, free, b, d);
 }
 
 }  // namespace tetcut::sim::detail

@@ -18,6 +18,7 @@
 #include <algorithm>
 #include <array>
 #include <cstdint>
+#include <memory>
 #include <span>
 #include <vector>
 
@@ -198,5 +199,28 @@ struct ConjugateGradientWorkspace {
 ConjugateGradientReport conjugate_gradients(const BlockSparseMatrix& a, std::span<const double> b, std::span<double> d,
                                             std::span<const std::uint8_t> free, std::span<const double> weight,
                                             const ConjugateGradientOptions& options, ConjugateGradientWorkspace* workspace);
+
+/// Solves A d = b over the free nodes directly: their part of the matrix as an Eigen sparse
+/// matrix, factorised by LDL^T (d is 0 at the others). For small or badly conditioned systems,
+/// where conjugate gradients would need many iterations. The fill-reducing order and symbolic
+/// factorisation are kept while the pattern and the free nodes stay the same, so a Newton loop
+/// pays them once.
+class DirectSolver {
+ public:
+  DirectSolver();
+  ~DirectSolver();
+  /// False when the factorisation fails.
+  bool solve(const BlockSparseMatrix& a, std::span<const std::uint8_t> free, std::span<const double> b, std::span<double> d);
+  /// Whether the last matrix solved was positive definite (every pivot of D positive), so that
+  /// its solution is a descent direction.
+  bool positive_definite() const;
+
+ private:
+  struct Factor;
+  std::unique_ptr<Factor> factor_;
+};
+
+/// A one-off DirectSolver::solve.
+bool solve_direct(const BlockSparseMatrix& a, std::span<const std::uint8_t> free, std::span<const double> b, std::span<double> d);
 
 }  // namespace tetcut::sim::detail

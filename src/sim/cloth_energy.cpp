@@ -44,18 +44,24 @@ double membrane_energy(const MembraneElement& e, double mu, double lambda, const
       const Eigen::Matrix<double, 3, 2> dp = df * stress + f * ds;
       for (int row = 0; row < 6; ++row) c(row, col) = dp(row % 3, row / 3);
     }
-    // dF(i, j)/dx(a, k) = delta_ik shape[a](j).
-    Eigen::Matrix<double, 6, 9> dfdx = Eigen::Matrix<double, 6, 9>::Zero();
-    for (int a = 0; a < 3; ++a) {
-      for (int i = 0; i < 3; ++i) {
-        for (int j = 0; j < 2; ++j) dfdx(3 * j + i, 3 * a + i) = e.shape[a][j];
-      }
-    }
-    Mat9 h = e.area * dfdx.transpose() * c * dfdx;
+    // Projected in F's space: H = area J^T C J with J = dF/dx of full row rank, so H has C's
+    // inertia (Sylvester) and clamping C's negative eigenvalues makes H positive semi-definite,
+    // exactly where it already was. 6 x 6 instead of 9 x 9.
     if (project) {
-      const Eigen::SelfAdjointEigenSolver<Mat9> eigen(h);
-      const Vec9 clamped = eigen.eigenvalues().cwiseMax(0.0);
-      h = eigen.eigenvectors() * clamped.asDiagonal() * eigen.eigenvectors().transpose();
+      const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 6, 6>> eigen(c);
+      c = eigen.eigenvectors() * eigen.eigenvalues().cwiseMax(0.0).asDiagonal() * eigen.eigenvectors().transpose();
+    }
+    // dF(i, j)/dx(a, k) = delta_ik shape[a](j), so block (a, b) of H is
+    // area sum_{j, m} shape[a](j) shape[b](m) C[(., j), (., m)].
+    Mat9 h;
+    for (int a = 0; a < 3; ++a) {
+      for (int b = 0; b < 3; ++b) {
+        Eigen::Matrix3d block = Eigen::Matrix3d::Zero();
+        for (int j = 0; j < 2; ++j) {
+          for (int m = 0; m < 2; ++m) block += e.shape[a][j] * e.shape[b][m] * c.block<3, 3>(3 * j, 3 * m);
+        }
+        h.block<3, 3>(3 * a, 3 * b) = e.area * block;
+      }
     }
     *hessian += h;
   }

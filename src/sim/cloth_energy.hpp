@@ -4,8 +4,8 @@
 // Membrane: St. Venant-Kirchhoff in plane stress. F = [x1 - x0, x2 - x0] Dm^-1 (3 x 2) maps the
 // rest plane to the world, E = (F^T F - I) / 2, psi = mu |E|^2 + (lambda / 2) tr(E)^2, and the
 // energy is the rest area (times the copy's material fraction) times psi. Its Hessian is not
-// positive semi-definite under compression, so Newton uses its projection (negative
-// eigenvalues clamped to zero; 9 x 9, cheap at cloth sizes).
+// positive semi-definite under compression, so Newton uses a projection: the negative
+// eigenvalues of d2psi/dF2 (6 x 6) clamped to zero.
 //
 // Bending: the quadratic model for a flat rest state (Bergou, Wardetzky, Harmon, Zorin, Grinspun
 // 2006). Over the hinge of an edge (x0, x1) with wings x2, x3 the vector b = sum_i k_i x_i vanishes

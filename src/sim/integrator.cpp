@@ -13,8 +13,6 @@
 
 #include "sim/simulator_state.hpp"
 
-#include <Eigen/SparseCholesky>
-
 #include <chrono>
 #include <cmath>
 
@@ -164,46 +162,6 @@ struct Potential {
   }
 };
 
-// The direct solve: the free nodes' part of the block matrix as an Eigen sparse matrix, LDL^T.
-bool solve_direct(const SimulatorState& s, std::vector<double>* d) {
-  const Index n = s.num_nodes();
-  std::vector<Index> dof(static_cast<std::size_t>(n), -1);
-  Index count = 0;
-  for (Index v = 0; v < n; ++v) {
-    if (s.free[v]) dof[v] = count++;
-  }
-  std::vector<Eigen::Triplet<double>> triplets;
-  const detail::BlockSparseMatrix& a = s.hessian;
-  // Walk the pattern row by row.
-  for (Index row = 0; row < n; ++row) {
-    if (dof[row] < 0) continue;
-    a.for_each_block(row, [&](Index k, Index column) {
-      if (dof[column] < 0) return;
-      double b[9];
-      a.read(k, b);
-      for (int i = 0; i < 3; ++i) {
-        for (int j = 0; j < 3; ++j) triplets.emplace_back(3 * dof[row] + i, 3 * dof[column] + j, b[3 * i + j]);
-      }
-    });
-  }
-  Eigen::SparseMatrix<double> matrix(3 * count, 3 * count);
-  matrix.setFromTriplets(triplets.begin(), triplets.end());
-  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(matrix);
-  if (ldlt.info() != Eigen::Success) return false;
-  Eigen::VectorXd b(3 * count);
-  for (Index v = 0; v < n; ++v) {
-    if (dof[v] >= 0) {
-      for (int k = 0; k < 3; ++k) b[3 * dof[v] + k] = s.rhs[3 * v + k];
-    }
-  }
-  const Eigen::VectorXd x = ldlt.solve(b);
-  if (ldlt.info() != Eigen::Success) return false;
-  for (Index v = 0; v < n; ++v) {
-    for (int k = 0; k < 3; ++k) (*d)[3 * v + k] = dof[v] >= 0 ? x[3 * dof[v] + k] : 0.0;
-  }
-  return true;
-}
-
 }  // namespace
 
 StepReport Simulator::step(const StepOptions& options) { return minimise(options, true); }
@@ -331,7 +289,7 @@ StepReport Simulator::minimise(const StepOptions& options, bool inertia) {
     for (std::size_t k = 0; k < size; ++k) s.rhs[k] = s.free[k / 3] ? -s.current_gradient[k] : 0.0;
     std::fill(s.direction.begin(), s.direction.end(), 0.0);
     if (options.solver == LinearSolver::kCholesky) {
-      if (!solve_direct(s, &s.direction)) throw Error(ErrorKind::kInvalidInput, "the Newton system could not be factorised");
+      if (!detail::solve_direct(s.hessian, s.free, s.rhs, s.direction)) throw Error(ErrorKind::kInvalidInput, "the Newton system could not be factorised");
     } else {
       if (!inertia) {
         // No mass to measure the residual by: the diagonal's, an estimate of H^-1.

@@ -64,7 +64,8 @@ std::vector<double> sorted_areas(const PlanarCutResult& r) {
 
 // The invariants every cut must keep: copies hold material and add up per piece, pieces add up to
 // the mesh, the boundary is closed (as many segments leave every vertex as enter it), and it is
-// oriented with the material on its left (its shoelace sum, per piece, is that piece's area).
+// oriented with the material on its left (its shoelace sum, per piece, is that piece's area), and
+// the material triangles cover each piece.
 void expect_invariants(const PlanarMesh& input, const PlanarCutResult& r) {
   const PlanarCutMesh& m = r.mesh;
   const Index copies = m.mesh.num_triangles();
@@ -85,7 +86,7 @@ void expect_invariants(const PlanarMesh& input, const PlanarCutResult& r) {
   }
   EXPECT_NEAR(sum, total, 1e-12 * total);
 
-  const MaterialBoundary& b = r.boundary;
+  const PlanarMaterial& b = r.material;
   std::vector<int> balance(b.num_vertices(), 0);
   std::vector<double> shoelace(m.num_pieces(), 0);
   for (Index s = 0; s < b.num_segments(); ++s) {
@@ -93,10 +94,19 @@ void expect_invariants(const PlanarMesh& input, const PlanarCutResult& r) {
     ++balance[u];
     --balance[v];
     const Eigen::Vector2d p = b.rest.row(u), q = b.rest.row(v);
-    shoelace[m.triangle_piece[b.segment_triangle[s]]] += 0.5 * (p.x() * q.y() - p.y() * q.x());
+    shoelace[m.triangle_piece[b.segment_copy[s]]] += 0.5 * (p.x() * q.y() - p.y() * q.x());
   }
   for (Index v = 0; v < b.num_vertices(); ++v) EXPECT_EQ(balance[v], 0) << "boundary vertex " << v << " is an end";
   for (Index p = 0; p < m.num_pieces(); ++p) EXPECT_NEAR(shoelace[p], m.piece_areas[p], 1e-12 * total) << "piece " << p;
+  // The material triangles cover each piece, counter-clockwise.
+  std::vector<double> covered(m.num_pieces(), 0);
+  for (Index t = 0; t < b.num_triangles(); ++t) {
+    const Eigen::Vector2d p = b.rest.row(b.triangles(t, 0)), q = b.rest.row(b.triangles(t, 1)), w = b.rest.row(b.triangles(t, 2));
+    const double area = 0.5 * ((q - p).x() * (w - p).y() - (q - p).y() * (w - p).x());
+    EXPECT_GE(area, -1e-15 * total) << "material triangle " << t;
+    covered[m.triangle_piece[b.triangle_copy[t]]] += area;
+  }
+  for (Index p = 0; p < m.num_pieces(); ++p) EXPECT_NEAR(covered[p], m.piece_areas[p], 1e-12 * total) << "piece " << p;
   // Embedded vertices sit where the copies' rest corners put them.
   const Points rest3 = [&] {
     Points x(m.mesh.num_nodes(), 3);
@@ -116,7 +126,7 @@ TEST(PlanarCutter, UncutSquareIsOnePiece) {
   EXPECT_EQ(r.mesh.num_pieces(), 1);
   EXPECT_EQ(r.mesh.mesh.num_triangles(), 8);
   EXPECT_EQ(r.mesh.mesh.num_nodes(), 9);
-  EXPECT_EQ(r.boundary.num_segments(), 8);
+  EXPECT_EQ(r.material.num_segments(), 8);
   expect_invariants(mesh, r);
 }
 
@@ -181,8 +191,8 @@ TEST(PlanarCutter, PartialCutSeparatesNothingButOpensASlit) {
   EXPECT_EQ(r.mesh.piece_areas[0], 1.0);
   // Both sides of the slit are boundary: its length twice, beside the square's perimeter.
   double length = 0;
-  for (Index s = 0; s < r.boundary.num_segments(); ++s) {
-    length += (r.boundary.rest.row(r.boundary.segments(s, 1)) - r.boundary.rest.row(r.boundary.segments(s, 0))).norm();
+  for (Index s = 0; s < r.material.num_segments(); ++s) {
+    length += (r.material.rest.row(r.material.segments(s, 1)) - r.material.rest.row(r.material.segments(s, 0))).norm();
   }
   EXPECT_NEAR(length, 4 + 2 * 0.6, 1e-12);
   // The triangles the slit crosses completely have two copies; the one it ends in has one.
@@ -243,7 +253,7 @@ TEST(PlanarCutter, OverlappingAndRepeatedSegmentsCountOnce) {
   EXPECT_EQ(sorted_areas(once), sorted_areas(overlapping));
   EXPECT_EQ(once.mesh.mesh.num_triangles(), overlapping.mesh.mesh.num_triangles());
   EXPECT_EQ(once.mesh.mesh.num_nodes(), overlapping.mesh.mesh.num_nodes());
-  EXPECT_EQ(once.boundary.num_segments() > 0, true);
+  EXPECT_EQ(once.material.num_segments() > 0, true);
   expect_invariants(mesh, overlapping);
 }
 
