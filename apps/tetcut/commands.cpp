@@ -27,6 +27,14 @@
 #include <vector>
 
 namespace tetcut::cli {
+
+void check_not_input(const std::filesystem::path& output, const std::filesystem::path& input) {
+  std::error_code ec;
+  if (std::filesystem::exists(output, ec) && std::filesystem::equivalent(output, input, ec)) {
+    throw Error(ErrorKind::kInvalidArgument, "the output would overwrite the input file", output.string());
+  }
+}
+
 namespace {
 
 namespace fs = std::filesystem;
@@ -39,13 +47,6 @@ Box box_from(const std::vector<double>& b) {
   return box;
 }
 
-// Rejects an output path that names an input: writing would replace the data being read.
-void check_not_input(const fs::path& output, const fs::path& input) {
-  std::error_code ec;
-  if (fs::exists(output, ec) && fs::equivalent(output, input, ec)) {
-    throw Error(ErrorKind::kInvalidArgument, "the output would overwrite the input file", output.string());
-  }
-}
 
 void check_output_kind(const fs::path& path, FileKind wanted) {
   if (file_kind(path) != wanted) {

@@ -4,6 +4,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include <filesystem>
 #include <functional>
 
 namespace tetcut::cli {
@@ -22,5 +23,9 @@ void add_render_command(CLI::App& app, Action& action);
 void add_view_command(CLI::App& app, Action& action);
 void add_demo_command(CLI::App& app, Action& action);
 void add_serve_command(CLI::App& app, Action& action);
+void add_cut2d_command(CLI::App& app, Action& action);
+
+/// Rejects an output path that names an input: writing would replace the data being read.
+void check_not_input(const std::filesystem::path& output, const std::filesystem::path& input);
 
 }  // namespace tetcut::cli

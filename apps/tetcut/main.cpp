@@ -27,6 +27,7 @@ int main(int argc, char** argv) {
   tetcut::cli::add_info_command(app, action);
   tetcut::cli::add_convert_command(app, action);
   tetcut::cli::add_cut_command(app, action);
+  tetcut::cli::add_cut2d_command(app, action);
   tetcut::cli::add_embed_command(app, action);
   tetcut::cli::add_sim_command(app, action);
   tetcut::cli::add_render_command(app, action);

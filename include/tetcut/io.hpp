@@ -84,6 +84,17 @@ void write_series(const std::filesystem::path& pvd, const std::vector<SeriesEntr
 /// Writes text to `path` through a temporary file renamed into place, like every writer here.
 void write_text_file(const std::filesystem::path& path, std::string_view text);
 
+/// Reads polylines (cuts of a planar mesh), each as its points (|P| x 3): OBJ `l` elements (.obj),
+/// legacy VTK POLYDATA LINES in ASCII (.vtk), VTK XML PolyData Lines (.vtp), or plain text (.txt,
+/// .xy, .xyz): one point "x y" or "x y z" per line, a blank line between polylines, '#' comments.
+/// A polyline closes by repeating its first point. Missing z coordinates are 0. Throws
+/// Error(kInvalidInput) naming the file and line for a malformed or non-finite point, an index out
+/// of range, a polyline of one point, or a file with no polyline at all.
+std::vector<Points> read_polylines(const std::filesystem::path& path);
+/// Writes segments (|S| x 2 ids into `points`) as OBJ `l` elements (.obj) or legacy VTK LINES (.vtk).
+void write_polylines(const std::filesystem::path& path, const Points& points, const Edges& segments);
+std::string supported_polyline_extensions();
+
 /// Lists the extensions each kind accepts, for help texts.
 std::string supported_tet_mesh_extensions();
 std::string supported_surface_extensions();

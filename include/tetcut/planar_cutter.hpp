@@ -109,6 +109,22 @@ struct PlanarCutReport {
   std::vector<Index> changed_triangles;   ///< older copies whose nodes changed, ascending
 };
 
+/// A coordinate plane in space that a planar mesh lies in: rest (u, v) are the coordinates on axes
+/// `u` and `v`, the coordinate on axis `normal` is `offset`.
+struct RestPlane {
+  int u = 0, v = 1, normal = 2;
+  double offset = 0;
+};
+
+/// The planar mesh of a triangle surface lying in a coordinate plane (one coordinate the same,
+/// bit for bit, at every vertex), with (u, v) ordered so that its triangles are counter-clockwise.
+/// Error(kInvalidInput) when no coordinate is constant or the triangles are not all of one
+/// orientation there (naming one that differs).
+PlanarMesh planar_mesh(const struct TriangleSurface& surface, RestPlane* plane);
+/// Points in space (|P| x 3) to (u, v), dropping the normal coordinate; and back.
+Points2 to_plane(const Points& points, const RestPlane& plane);
+Points to_space(const Points2& points, const RestPlane& plane);
+
 class PlanarCutter {
  public:
   /// Takes the mesh to cut; each triangle starts as its own copy over the input nodes. Throws

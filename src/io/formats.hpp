@@ -42,6 +42,8 @@ void write_vtu(std::ostream& out, const Points& points, const Tets& tets, const 
 /// VTK XML PolyData: a triangle surface (polygons read as fans).
 TriangleSurface read_vtp(std::string_view bytes, const std::string& source);
 void write_vtp(std::ostream& out, const Points& points, const Triangles& triangles);
+/// The Lines of VTK XML PolyData, each polyline as its points.
+std::vector<Points> read_vtp_lines(std::string_view bytes, const std::string& source);
 std::vector<SeriesEntry> read_pvd(std::string_view bytes, const std::string& source);
 void write_pvd(std::ostream& out, const std::vector<SeriesEntry>& entries);
 

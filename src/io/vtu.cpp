@@ -41,6 +41,8 @@ class VtuReader {
   TetMeshData read();
   /// A VTK XML PolyData file's polygons (.vtp), split into fans of triangles.
   TriangleSurface read_polydata();
+  /// The Lines of a PolyData file, each as its points.
+  std::vector<Points> read_polydata_lines();
   /// A ParaView collection's datasets (.pvd), in file order, with their paths as written.
   std::vector<SeriesEntry> read_collection();
 
@@ -49,6 +51,10 @@ class VtuReader {
   // attributes; returns the <UnstructuredGrid> or <PolyData> element.
   pugi::xml_node open(pugi::xml_document* doc, const char* type);
   std::vector<double> point_coordinates(const pugi::xml_node& piece, std::int64_t num_points);
+  // The cells of a PolyData block ("Polys", "Lines"): `count` lists of point ids, each checked
+  // against the piece's points and holding at least `min_points`; `what` names one in errors.
+  std::vector<std::vector<std::int64_t>> cell_block(const pugi::xml_node& piece, const char* block, const char* what,
+                                                    std::int64_t count, std::int64_t min_points, std::int64_t num_points);
   [[noreturn]] void fail(const std::string& message, std::ptrdiff_t offset = -1) const {
     std::int64_t line = 0;
     if (offset >= 0) line = 1 + std::count(bytes_.begin(), bytes_.begin() + offset, '\n');
@@ -303,6 +309,37 @@ TetMeshData VtuReader::read() {
   return data;
 }
 
+std::vector<std::vector<std::int64_t>> VtuReader::cell_block(const pugi::xml_node& piece, const char* block, const char* what,
+                                                               std::int64_t count, std::int64_t min_points, std::int64_t num_points) {
+  std::vector<std::vector<std::int64_t>> cells;
+  if (count == 0) return cells;
+  pugi::xml_node connectivity, offsets;
+  for (const pugi::xml_node& array : piece.child(block).children("DataArray")) {
+    const std::string name = array.attribute("Name").as_string();
+    if (name == "connectivity") connectivity = array;
+    if (name == "offsets") offsets = array;
+  }
+  if (!connectivity || !offsets) fail(std::string(block) + " must hold connectivity and offsets arrays", offset_of(piece));
+  const auto conn = values<std::int64_t>(connectivity, -1);
+  const auto offs = values<std::int64_t>(offsets, count);
+  std::int64_t start = 0;
+  for (std::int64_t c = 0; c < count; ++c) {
+    const std::int64_t end = offs[static_cast<std::size_t>(c)];
+    if (end < start + min_points || end > static_cast<std::int64_t>(conn.size())) {
+      fail(std::string(what) + " " + std::to_string(c + 1) + " has fewer than " + std::to_string(min_points) +
+               " points or an offset out of range",
+           offset_of(offsets));
+    }
+    std::vector<std::int64_t>& cell = cells.emplace_back();
+    for (std::int64_t k = start; k < end; ++k) {
+      check_point_id(what, c, conn[static_cast<std::size_t>(k)], num_points, connectivity);
+      cell.push_back(conn[static_cast<std::size_t>(k)]);
+    }
+    start = end;
+  }
+  return cells;
+}
+
 TriangleSurface VtuReader::read_polydata() {
   pugi::xml_document doc;
   const pugi::xml_node poly = open(&doc, "PolyData");
@@ -315,33 +352,11 @@ TriangleSurface VtuReader::read_polydata() {
     const std::vector<double> coords = point_coordinates(piece, num_points);
     const Index base = static_cast<Index>(xyz.size() / 3);
     xyz.insert(xyz.end(), coords.begin(), coords.end());
-    if (num_polys == 0) continue;
-    pugi::xml_node connectivity, offsets;
-    for (const pugi::xml_node& array : piece.child("Polys").children("DataArray")) {
-      const std::string name = array.attribute("Name").as_string();
-      if (name == "connectivity") connectivity = array;
-      if (name == "offsets") offsets = array;
-    }
-    if (!connectivity || !offsets) fail("Polys must hold connectivity and offsets arrays", offset_of(piece));
-    const auto conn = values<std::int64_t>(connectivity, -1);
-    const auto offs = values<std::int64_t>(offsets, num_polys);
-    std::int64_t start = 0;
-    for (std::int64_t c = 0; c < num_polys; ++c) {
-      const std::int64_t end = offs[static_cast<std::size_t>(c)];
-      if (end < start + 3 || end > static_cast<std::int64_t>(conn.size())) {
-        fail("polygon " + std::to_string(c + 1) + " has fewer than 3 points or an offset out of range", offset_of(offsets));
-      }
-      for (std::int64_t k = start; k < end; ++k) {
-        check_point_id("polygon", c, conn[static_cast<std::size_t>(k)], num_points, connectivity);
-      }
+    for (const auto& polygon : cell_block(piece, "Polys", "polygon", num_polys, 3, num_points)) {
       // A fan around the first corner.
-      for (std::int64_t k = start + 1; k + 1 < end; ++k) {
-        for (const std::int64_t id : {conn[static_cast<std::size_t>(start)], conn[static_cast<std::size_t>(k)],
-                                      conn[static_cast<std::size_t>(k + 1)]}) {
-          corners.push_back(base + static_cast<Index>(id));
-        }
+      for (std::size_t k = 1; k + 1 < polygon.size(); ++k) {
+        for (const std::int64_t id : {polygon[0], polygon[k], polygon[k + 1]}) corners.push_back(base + static_cast<Index>(id));
       }
-      start = end;
     }
   }
   TriangleSurface surface;
@@ -349,6 +364,25 @@ TriangleSurface VtuReader::read_polydata() {
   surface.triangles.resize(static_cast<Index>(corners.size() / 3), 3);
   for (std::size_t i = 0; i < corners.size(); ++i) surface.triangles(static_cast<Index>(i / 3), static_cast<int>(i % 3)) = corners[i];
   return surface;
+}
+
+std::vector<Points> VtuReader::read_polydata_lines() {
+  pugi::xml_document doc;
+  const pugi::xml_node poly = open(&doc, "PolyData");
+  std::vector<Points> lines;
+  for (const pugi::xml_node& piece : poly.children("Piece")) {
+    const std::int64_t num_points = piece.attribute("NumberOfPoints").as_llong(-1);
+    const std::int64_t num_lines = piece.attribute("NumberOfLines").as_llong(0);
+    if (num_points < 0) fail("Piece lacks NumberOfPoints", offset_of(piece));
+    const std::vector<double> coords = point_coordinates(piece, num_points);
+    for (const auto& line : cell_block(piece, "Lines", "line", num_lines, 2, num_points)) {
+      Points& points = lines.emplace_back(static_cast<Index>(line.size()), 3);
+      for (std::size_t k = 0; k < line.size(); ++k) {
+        for (int j = 0; j < 3; ++j) points(static_cast<Index>(k), j) = coords[3 * static_cast<std::size_t>(line[k]) + j];
+      }
+    }
+  }
+  return lines;
 }
 
 void write_binary_array(std::ostream& out, const char* type, const char* name, int components, const std::string& bytes) {
@@ -420,6 +454,11 @@ void write_pvd(std::ostream& out, const std::vector<SeriesEntry>& entries) {
 
 TetMeshData read_vtu(std::string_view bytes, const std::string& source) { return VtuReader(bytes, source).read(); }
 TriangleSurface read_vtp(std::string_view bytes, const std::string& source) { return VtuReader(bytes, source).read_polydata(); }
+
+std::vector<Points> read_vtp_lines(std::string_view bytes, const std::string& source) {
+  return VtuReader(bytes, source).read_polydata_lines();
+}
+
 
 void write_vtu(std::ostream& out, const Points& points, const Tets& tets, const std::vector<CellField>& fields) {
   out << "<?xml version=\"1.0\"?>\n"

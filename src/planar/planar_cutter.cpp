@@ -8,6 +8,7 @@
 
 #include <tetcut/error.hpp>
 #include <tetcut/planar_cutter.hpp>
+#include <tetcut/surface.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -620,6 +621,72 @@ Index PlanarCutter::num_cells() const {
     cells += state_->arrangements[t] ? static_cast<Index>(state_->arrangements[t]->faces().size()) : 1;
   }
   return cells;
+}
+
+PlanarMesh planar_mesh(const TriangleSurface& surface, RestPlane* plane) {
+  const Index n = surface.num_vertices();
+  if (n == 0 || surface.num_triangles() == 0) throw Error(ErrorKind::kInvalidInput, "the surface has no triangles");
+  int normal = -1;
+  for (int k = 2; k >= 0 && normal < 0; --k) {
+    if ((surface.vertices.col(k).array() == surface.vertices(0, k)).all()) normal = k;
+  }
+  if (normal < 0) {
+    throw Error(ErrorKind::kInvalidInput,
+                "a planar mesh must lie in a coordinate plane (x, y or z the same at every vertex); this one does not");
+  }
+  RestPlane p;
+  p.normal = normal;
+  p.u = normal == 0 ? 1 : 0;
+  p.v = normal == 2 ? 1 : 2;
+  p.offset = surface.vertices(0, normal);
+  PlanarMesh mesh;
+  mesh.rest = to_plane(surface.vertices, p);
+  mesh.triangles = surface.triangles;
+  for (Index t = 0; t < mesh.num_triangles(); ++t) {
+    for (int k = 0; k < 3; ++k) {
+      if (mesh.triangles(t, k) < 0 || mesh.triangles(t, k) >= n) {
+        throw Error(ErrorKind::kInvalidInput, triangle_name(t) + " names a vertex out of range");
+      }
+    }
+  }
+  // One orientation throughout: counter-clockwise in (u, v), or all clockwise (then swap u and v).
+  auto orientation = [&](Index t) {
+    const double a[2] = {mesh.rest(mesh.triangles(t, 0), 0), mesh.rest(mesh.triangles(t, 0), 1)};
+    const double b[2] = {mesh.rest(mesh.triangles(t, 1), 0), mesh.rest(mesh.triangles(t, 1), 1)};
+    const double c[2] = {mesh.rest(mesh.triangles(t, 2), 0), mesh.rest(mesh.triangles(t, 2), 1)};
+    return geometry::orient2d(a, b, c);
+  };
+  int first = 0;
+  for (Index t = 0; t < mesh.num_triangles(); ++t) {
+    const int o = orientation(t);
+    if (o == 0) continue;  // zero area: the cutter names it
+    if (first == 0) first = o;
+    if (o != first) {
+      throw Error(ErrorKind::kInvalidInput, triangle_name(t) + " is oriented against the triangles before it: a planar mesh's "
+                                                               "triangles must all turn the same way");
+    }
+  }
+  if (first < 0) {
+    std::swap(p.u, p.v);
+    mesh.rest = to_plane(surface.vertices, p);
+  }
+  *plane = p;
+  return mesh;
+}
+
+Points2 to_plane(const Points& points, const RestPlane& plane) {
+  Points2 out(points.rows(), 2);
+  out.col(0) = points.col(plane.u);
+  out.col(1) = points.col(plane.v);
+  return out;
+}
+
+Points to_space(const Points2& points, const RestPlane& plane) {
+  Points out(points.rows(), 3);
+  out.col(plane.u) = points.col(0);
+  out.col(plane.v) = points.col(1);
+  out.col(plane.normal).setConstant(plane.offset);
+  return out;
 }
 
 std::vector<double> PlanarCutMesh::material_fractions() const {
