@@ -12,6 +12,7 @@
 
 #include <tetcut/cloth.hpp>
 #include <tetcut/error.hpp>
+#include <tetcut/generators.hpp>
 #include <tetcut/io.hpp>
 #include <tetcut/planar_cutter.hpp>
 #include <tetcut/render.hpp>
@@ -84,19 +85,7 @@ int main(int argc, char** argv) {
 
   // 8 x 8 cells, each two triangles: 128 triangles on a metre square.
   const int n = 8;
-  tetcut::PlanarMesh square;
-  square.rest.resize((n + 1) * (n + 1), 2);
-  for (int j = 0; j <= n; ++j) {
-    for (int i = 0; i <= n; ++i) square.rest.row(j * (n + 1) + i) << 1.0 * i / n, 1.0 * j / n;
-  }
-  square.triangles.resize(2 * n * n, 3);
-  for (int j = 0; j < n; ++j) {
-    for (int i = 0; i < n; ++i) {
-      const Index a = j * (n + 1) + i, b = a + 1, c = a + n + 2, d = a + n + 1;
-      square.triangles.row(2 * (j * n + i)) << a, b, c;
-      square.triangles.row(2 * (j * n + i) + 1) << a, c, d;
-    }
-  }
+  const tetcut::PlanarMesh square = tetcut::make_planar_grid(n);
   tetcut::PlanarCutter cutter(square);
   tetcut::PlanarCutResult cut = cutter.result();
 

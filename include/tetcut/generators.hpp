@@ -1,6 +1,7 @@
 #pragma once
-// Structured tet meshes: boxes of cubes split into tets, and BCC lattices.
+// Structured meshes: boxes of cubes split into tets, BCC lattices, and planar squares of triangles.
 
+#include <tetcut/planar_cutter.hpp>
 #include <tetcut/tet_mesh.hpp>
 
 #include <array>
@@ -26,5 +27,11 @@ TetMesh make_grid(const Box& box, const std::array<Index, 3>& cells, int tets_pe
 /// The lattice has ceil(extent / spacing) cubes along each axis (at least one), centred on `box`,
 /// so it covers `box`.
 TetMesh make_bcc(const Box& box, double spacing);
+
+/// A square of side `size` at the origin as cells x cells squares, each split along its diagonal
+/// from (i, j) to (i + 1, j + 1) into two counter-clockwise triangles: node (i, j) is
+/// j (cells + 1) + i, square (i, j) holds triangles 2 (j cells + i) and the one after. Throws
+/// Error(kInvalidArgument) on a cell count below 1 or a size that is not positive.
+PlanarMesh make_planar_grid(Index cells, double size = 1);
 
 }  // namespace tetcut

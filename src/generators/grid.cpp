@@ -54,4 +54,25 @@ TetMesh make_grid(const Box& box, const std::array<Index, 3>& cells, int tets_pe
   return generators::assemble(std::move(points), tets);
 }
 
+PlanarMesh make_planar_grid(Index cells, double size) {
+  if (cells < 1 || !(size > 0) || !std::isfinite(size)) {
+    throw Error(ErrorKind::kInvalidArgument, "a planar grid needs at least one cell and a positive size");
+  }
+  const Index n = cells;
+  PlanarMesh mesh;
+  mesh.rest.resize((n + 1) * (n + 1), 2);
+  for (Index j = 0; j <= n; ++j) {
+    for (Index i = 0; i <= n; ++i) mesh.rest.row(j * (n + 1) + i) << size * i / n, size * j / n;
+  }
+  mesh.triangles.resize(2 * n * n, 3);
+  for (Index j = 0; j < n; ++j) {
+    for (Index i = 0; i < n; ++i) {
+      const Index a = j * (n + 1) + i, b = a + 1, c = a + n + 2, d = a + n + 1;
+      mesh.triangles.row(2 * (j * n + i)) << a, b, c;
+      mesh.triangles.row(2 * (j * n + i) + 1) << a, c, d;
+    }
+  }
+  return mesh;
+}
+
 }  // namespace tetcut

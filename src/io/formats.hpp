@@ -5,6 +5,7 @@
 #include <tetcut/io.hpp>
 
 #include <cstdint>
+#include <functional>
 #include <ostream>
 #include <string>
 #include <string_view>
@@ -12,6 +13,8 @@
 #include <vector>
 
 namespace tetcut::io {
+
+class TextScanner;
 
 /// A tet mesh as parsed, before validation by the TetMesh constructor.
 struct TetMeshData {
@@ -51,6 +54,13 @@ TetMeshData read_vtk_legacy(std::string_view bytes, const std::string& source);
 void write_vtk_legacy(std::ostream& out, const Points& points, const Tets& tets, const std::vector<CellField>& fields);
 
 TriangleSurface read_obj(std::string_view text, const std::string& source);
+/// The rest of an OBJ `v` line: three finite coordinates appended to `xyz`; `fail` reports.
+void read_obj_vertex(TextScanner& in, const std::function<void(const std::string&)>& fail, std::vector<double>* xyz);
+/// The rest of an OBJ `f` or `l` line: vertex indices (1-based, or negative from the end; "i/t/n"
+/// forms), resolved against the `defined` vertices before it and appended to `ids`. `item` and
+/// `element` name a corner and the line in messages ("face corner", "face").
+void read_obj_indices(TextScanner& in, const std::function<void(const std::string&)>& fail, const std::string& item,
+                      const std::string& element, std::int64_t defined, std::vector<Index>* ids);
 void write_obj(std::ostream& out, const TriangleSurface& surface);
 TriangleSurface read_off(std::string_view text, const std::string& source);
 void write_off(std::ostream& out, const TriangleSurface& surface);

@@ -27,6 +27,32 @@ void write_xyz_line(std::ostream& out, const char* prefix, const Points& v, Eige
 
 }  // namespace
 
+void read_obj_vertex(TextScanner& in, const std::function<void(const std::string&)>& fail, std::vector<double>* xyz) {
+  for (const char* axis : {"x", "y", "z"}) {
+    const auto t = in.try_token();
+    if (!t) fail(std::string("vertex has no ") + axis + " coordinate");
+    const auto v = parse_real(*t);
+    if (!v) fail("vertex coordinate '" + std::string(*t) + "' is not a number");
+    if (!std::isfinite(*v)) fail("vertex coordinate '" + std::string(*t) + "' is not a finite number");
+    xyz->push_back(*v);
+  }
+}
+
+void read_obj_indices(TextScanner& in, const std::function<void(const std::string&)>& fail, const std::string& item,
+                      const std::string& element, std::int64_t defined, std::vector<Index>* ids) {
+  while (const auto t = in.try_token()) {
+    // "i", "i/t", "i//n" or "i/t/n": the position index comes first.
+    const auto index = parse_integer(t->substr(0, t->find('/')));
+    if (!index || *index == 0) fail(item + " '" + std::string(*t) + "' is not a valid vertex index");
+    const std::int64_t resolved = *index > 0 ? *index - 1 : defined + *index;
+    if (resolved < 0 || resolved >= defined) {
+      fail(element + " refers to vertex " + std::to_string(*index) + ", but only " + std::to_string(defined) +
+           " vertices are defined before it");
+    }
+    ids->push_back(static_cast<Index>(resolved));
+  }
+}
+
 TriangleSurface read_obj(std::string_view text, const std::string& source) {
   TextScanner file(text, source, '\0');
   std::vector<double> xyz;
@@ -41,29 +67,10 @@ TriangleSurface read_obj(std::string_view text, const std::string& source) {
     // Keep the file's line numbers in messages from this line's scanner.
     auto fail = [&](const std::string& message) { file.fail_at(line_number, message); };
     if (*keyword == "v") {
-      for (const char* axis : {"x", "y", "z"}) {
-        const auto t = in.try_token();
-        if (!t) fail(std::string("vertex has no ") + axis + " coordinate");
-        const auto v = parse_real(*t);
-        if (!v) fail("vertex coordinate '" + std::string(*t) + "' is not a number");
-        if (!std::isfinite(*v)) fail("vertex coordinate '" + std::string(*t) + "' is not a finite number");
-        xyz.push_back(*v);
-      }
+      read_obj_vertex(in, fail, &xyz);
     } else if (*keyword == "f") {
       polygon.clear();
-      const std::int64_t num_vertices = static_cast<std::int64_t>(xyz.size() / 3);
-      while (const auto t = in.try_token()) {
-        // "i", "i/t", "i//n" or "i/t/n": the position index comes first.
-        const std::string_view index_text = t->substr(0, t->find('/'));
-        const auto index = parse_integer(index_text);
-        if (!index || *index == 0) fail("face corner '" + std::string(*t) + "' is not a valid vertex index");
-        const std::int64_t resolved = *index > 0 ? *index - 1 : num_vertices + *index;
-        if (resolved < 0 || resolved >= num_vertices) {
-          fail("face refers to vertex " + std::to_string(*index) + ", but only " + std::to_string(num_vertices) +
-               " vertices are defined before it");
-        }
-        polygon.push_back(static_cast<Index>(resolved));
-      }
+      read_obj_indices(in, fail, "face corner", "face", static_cast<std::int64_t>(xyz.size() / 3), &polygon);
       if (polygon.size() < 3) fail("face has fewer than 3 corners");
       add_fan(triangles, polygon);
     }

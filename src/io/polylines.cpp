@@ -45,27 +45,10 @@ std::vector<Points> read_obj_lines(std::string_view text, const std::string& sou
     if (!keyword) continue;
     auto fail = [&](const std::string& message) { file.fail_at(line_number, message); };
     if (*keyword == "v") {
-      for (const char* axis : {"x", "y", "z"}) {
-        const auto t = in.try_token();
-        if (!t) fail(std::string("vertex has no ") + axis + " coordinate");
-        const auto v = parse_real(*t);
-        if (!v || !std::isfinite(*v)) fail("vertex coordinate '" + std::string(*t) + "' is not a finite number");
-        xyz.push_back(*v);
-      }
+      read_obj_vertex(in, fail, &xyz);
     } else if (*keyword == "l") {
-      const auto defined = static_cast<std::int64_t>(xyz.size() / 3);
       std::vector<Index> ids;
-      while (const auto t = in.try_token()) {
-        // "i" or "i/t": the position index comes first.
-        const auto index = parse_integer(t->substr(0, t->find('/')));
-        if (!index || *index == 0) fail("line point '" + std::string(*t) + "' is not a valid vertex index");
-        const std::int64_t resolved = *index > 0 ? *index - 1 : defined + *index;
-        if (resolved < 0 || resolved >= defined) {
-          fail("line refers to vertex " + std::to_string(*index) + ", but only " + std::to_string(defined) +
-               " vertices are defined before it");
-        }
-        ids.push_back(static_cast<Index>(resolved));
-      }
+      read_obj_indices(in, fail, "line point", "line", static_cast<std::int64_t>(xyz.size() / 3), &ids);
       if (ids.size() < 2) fail("line has fewer than 2 points");
       lines.push_back(gather(xyz, ids));
     }

@@ -33,6 +33,21 @@ namespace {
 Vec3 lift(double x, double y) { return {x, y, 0.0}; }
 
 std::string triangle_name(Index t) { return "triangle " + std::to_string(t); }
+
+// Whether the segment from p to q (distinct) runs at least as far along x as along y; then it
+// does not run along y alone. Decided on rounded differences, which are zero exactly when the
+// coordinates are equal: a choice of axis, not a topological decision.
+bool runs_along_x(const Vec3& p, const Vec3& q) {
+  return p.x() != q.x() && (p.y() == q.y() || std::abs(q.x() - p.x()) >= std::abs(q.y() - p.y()));
+}
+
+// The line through distinct p and q: the wall through them along z. Only the plane matters, not
+// its orientation, so the point "inside" is any point off the line: a step away along the other axis.
+PlaneId line_through(registry::IntersectionRegistry& registry, const Vec3& p, const Vec3& q) {
+  const Vec3 off = runs_along_x(p, q) ? Vec3(p.x(), p.y() + 1 + 2 * std::abs(p.y()), 0)
+                                      : Vec3(p.x() + 1 + 2 * std::abs(p.x()), p.y(), 0);
+  return registry.wall(p, q, 2, off).id;
+}
 }  // namespace
 
 struct PlanarCutter::State {
@@ -126,11 +141,7 @@ PlanarCutter::State::State(PlanarMesh mesh_in) : input(std::move(mesh_in)), geom
   geometry.rest_plane = registry.triangle_plane(Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0)).id;
   geometry.edge_line.resize(edges.size());
   for (std::size_t e = 0; e < edges.size(); ++e) {
-    const Vec3 p = rest3.row(edges[e][0]).transpose(), q = rest3.row(edges[e][1]).transpose();
-    // Only the plane matters, not its orientation: any point off the line serves as "inner".
-    const Vec3 off = std::abs(q.x() - p.x()) >= std::abs(q.y() - p.y()) ? Vec3(p.x(), p.y() + 1 + 2 * std::abs(p.y()), 0)
-                                                                        : Vec3(p.x() + 1 + 2 * std::abs(p.x()), p.y(), 0);
-    geometry.edge_line[e] = registry.wall(p, q, 2, off).id;
+    geometry.edge_line[e] = line_through(registry, rest3.row(edges[e][0]).transpose(), rest3.row(edges[e][1]).transpose());
   }
   geometry.edge_points.resize(edges.size());
   geometry.node_vertex.assign(n, -1);
@@ -197,13 +208,10 @@ planar::PreparedSegment PlanarCutter::State::prepare(const Vec3& p, const Vec3& 
   auto& registry = geometry.registry;
   planar::PreparedSegment s;
   s.id = id;
-  const bool across_x = p.x() != q.x() && (p.y() == q.y() || std::abs(q.x() - p.x()) >= std::abs(q.y() - p.y()));
-  // The segment's line, oriented arbitrarily (a point off it: step away along the other axis).
-  const Vec3 off = across_x ? Vec3(p.x(), p.y() + 1 + 2 * std::abs(p.y()), 0) : Vec3(p.x() + 1 + 2 * std::abs(p.x()), p.y(), 0);
-  s.line = registry.wall(p, q, 2, off).id;
+  s.line = line_through(registry, p, q);
   // End walls: through the endpoint and the endpoint lifted to z = 1 (exact), along the axis the
   // segment runs least along, so never parallel to it; the other end is on the positive side.
-  const int axis = across_x ? 1 : 0;
+  const int axis = runs_along_x(p, q) ? 1 : 0;
   s.walls[0] = registry.wall(p, Vec3(p.x(), p.y(), 1), axis, q);
   s.walls[1] = registry.wall(q, Vec3(q.x(), q.y(), 1), axis, p);
   return s;

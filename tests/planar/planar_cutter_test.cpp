@@ -1,6 +1,7 @@
 // The planar cutter on cases with exact answers, on degenerate input, and on random polyline soups.
 
 #include <tetcut/error.hpp>
+#include <tetcut/generators.hpp>
 #include <tetcut/planar_cutter.hpp>
 
 #include <gtest/gtest.h>
@@ -12,24 +13,6 @@
 
 namespace tetcut {
 namespace {
-
-// The unit square as n x n cells, each split into two counter-clockwise triangles.
-PlanarMesh grid_square(int n, double size = 1.0) {
-  PlanarMesh mesh;
-  mesh.rest.resize((n + 1) * (n + 1), 2);
-  for (int j = 0; j <= n; ++j) {
-    for (int i = 0; i <= n; ++i) mesh.rest.row(j * (n + 1) + i) << size * i / n, size * j / n;
-  }
-  mesh.triangles.resize(2 * n * n, 3);
-  for (int j = 0; j < n; ++j) {
-    for (int i = 0; i < n; ++i) {
-      const Index a = j * (n + 1) + i, b = a + 1, c = a + n + 2, d = a + n + 1;
-      mesh.triangles.row(2 * (j * n + i)) << a, b, c;
-      mesh.triangles.row(2 * (j * n + i) + 1) << a, c, d;
-    }
-  }
-  return mesh;
-}
 
 Polyline line(std::initializer_list<std::array<double, 2>> points, bool closed = false) {
   Polyline l;
@@ -121,7 +104,7 @@ void expect_invariants(const PlanarMesh& input, const PlanarCutResult& r) {
 }
 
 TEST(PlanarCutter, UncutSquareIsOnePiece) {
-  const PlanarMesh mesh = grid_square(2);
+  const PlanarMesh mesh = make_planar_grid(2);
   const PlanarCutResult r = cut_all(mesh, {});
   EXPECT_EQ(r.mesh.num_pieces(), 1);
   EXPECT_EQ(r.mesh.mesh.num_triangles(), 8);
@@ -131,7 +114,7 @@ TEST(PlanarCutter, UncutSquareIsOnePiece) {
 }
 
 TEST(PlanarCutter, StraightCutAcrossTwoTriangles) {
-  const PlanarMesh mesh = grid_square(1);
+  const PlanarMesh mesh = make_planar_grid(1);
   const PlanarCutResult r = cut_all(mesh, {line({{0.5, -1}, {0.5, 2}})});
   EXPECT_EQ(r.mesh.num_pieces(), 2);
   EXPECT_EQ(r.mesh.piece_areas[0], 0.5);
@@ -142,7 +125,7 @@ TEST(PlanarCutter, StraightCutAcrossTwoTriangles) {
 }
 
 TEST(PlanarCutter, StripsHaveExactAreas) {
-  const PlanarMesh mesh = grid_square(4);
+  const PlanarMesh mesh = make_planar_grid(4);
   const PlanarCutResult r =
       cut_all(mesh, {line({{-1, 0.375}, {2, 0.375}}), line({{2, 0.6875}, {-1, 0.6875}}), line({{-1, 0.125}, {2, 0.125}})});
   ASSERT_EQ(r.mesh.num_pieces(), 4);
@@ -153,7 +136,7 @@ TEST(PlanarCutter, StripsHaveExactAreas) {
 }
 
 TEST(PlanarCutter, CutAlongEdgesThroughVerticesSplitsNoTriangle) {
-  const PlanarMesh mesh = grid_square(4);
+  const PlanarMesh mesh = make_planar_grid(4);
   const PlanarCutResult r = cut_all(mesh, {line({{-1, 0.5}, {2, 0.5}})});
   ASSERT_EQ(r.mesh.num_pieces(), 2);
   EXPECT_EQ(r.mesh.piece_areas[0], 0.5);
@@ -166,7 +149,7 @@ TEST(PlanarCutter, CutAlongEdgesThroughVerticesSplitsNoTriangle) {
 TEST(PlanarCutter, DiagonalThroughVerticesAcrossTriangles) {
   // The grid's diagonals run from (i, j) to (i + 1, j + 1); this cut runs the other way, through
   // the vertices (i, n - i), splitting the triangles it crosses.
-  const PlanarMesh mesh = grid_square(4);
+  const PlanarMesh mesh = make_planar_grid(4);
   const PlanarCutResult r = cut_all(mesh, {line({{-0.25, 1.25}, {1.25, -0.25}})});
   ASSERT_EQ(r.mesh.num_pieces(), 2);
   EXPECT_EQ(r.mesh.piece_areas[0], 0.5);
@@ -175,7 +158,7 @@ TEST(PlanarCutter, DiagonalThroughVerticesAcrossTriangles) {
 }
 
 TEST(PlanarCutter, TCut) {
-  const PlanarMesh mesh = grid_square(4);
+  const PlanarMesh mesh = make_planar_grid(4);
   const PlanarCutResult r = cut_all(mesh, {line({{-1, 0.4375}, {2, 0.4375}}), line({{0.3125, 0.4375}, {0.3125, 3}})});
   ASSERT_EQ(r.mesh.num_pieces(), 3);
   EXPECT_EQ(sorted_areas(r), (std::vector<double>{0.3125 * 0.5625, 0.6875 * 0.5625, 0.4375}));
@@ -183,7 +166,7 @@ TEST(PlanarCutter, TCut) {
 }
 
 TEST(PlanarCutter, PartialCutSeparatesNothingButOpensASlit) {
-  const PlanarMesh mesh = grid_square(4);
+  const PlanarMesh mesh = make_planar_grid(4);
   PlanarCutter cutter(mesh);
   cutter.cut(std::vector<Polyline>{line({{-1, 0.4375}, {0.6, 0.4375}})});
   const PlanarCutResult r = cutter.result();
@@ -216,7 +199,7 @@ TEST(PlanarCutter, ClosedLoopInsideOneTriangle) {
 }
 
 TEST(PlanarCutter, CutOfACutInLaterBatches) {
-  const PlanarMesh mesh = grid_square(4);
+  const PlanarMesh mesh = make_planar_grid(4);
   PlanarCutter cutter(mesh);
   const PlanarCutReport first = cutter.cut(std::vector<Polyline>{line({{-1, 0.3}, {2, 0.7}})});
   EXPECT_EQ(cutter.result().mesh.num_pieces(), 2);
@@ -246,7 +229,7 @@ TEST(PlanarCutter, CutOfACutInLaterBatches) {
 }
 
 TEST(PlanarCutter, OverlappingAndRepeatedSegmentsCountOnce) {
-  const PlanarMesh mesh = grid_square(4);
+  const PlanarMesh mesh = make_planar_grid(4);
   const PlanarCutResult once = cut_all(mesh, {line({{-1, 0.3}, {2, 0.3}})});
   const PlanarCutResult overlapping =
       cut_all(mesh, {line({{-1, 0.3}, {0.7, 0.3}}), line({{0.2, 0.3}, {2, 0.3}}), line({{2, 0.3}, {-1, 0.3}})});
@@ -258,7 +241,7 @@ TEST(PlanarCutter, OverlappingAndRepeatedSegmentsCountOnce) {
 }
 
 TEST(PlanarCutter, ZeroLengthSegmentsAreSkippedAndReported) {
-  const PlanarMesh mesh = grid_square(2);
+  const PlanarMesh mesh = make_planar_grid(2);
   PlanarCutter cutter(mesh);
   const PlanarCutReport report = cutter.cut(std::vector<Polyline>{line({{0.3, 0.3}, {0.3, 0.3}, {0.7, 0.3}})});
   EXPECT_EQ(report.segments, 2);
@@ -267,7 +250,7 @@ TEST(PlanarCutter, ZeroLengthSegmentsAreSkippedAndReported) {
 }
 
 TEST(PlanarCutter, BadInputIsRefusedAndChangesNothing) {
-  PlanarMesh mesh = grid_square(2);
+  PlanarMesh mesh = make_planar_grid(2);
   PlanarCutter cutter(mesh);
   Polyline bad = line({{0.1, 0.1}, {0.9, 0.9}});
   bad.points(1, 1) = std::nan("");
@@ -290,6 +273,31 @@ TEST(PlanarCutter, BadInputIsRefusedAndChangesNothing) {
   PlanarMesh out_of_range = mesh;
   out_of_range.triangles(0, 0) = 99;
   EXPECT_THROW({ PlanarCutter c(out_of_range); }, Error);
+}
+
+TEST(PlanarCutter, ToRestFollowsEachTriangleBackToRest) {
+  // A cut square turned and moved in space: points on the moved copies map back to where they
+  // came from in the rest plane, on both sides of the cut.
+  const PlanarMesh mesh = make_planar_grid(4);
+  PlanarCutter cutter(mesh);
+  cutter.cut(std::vector<Polyline>{line({{-1, 0.5}, {2, 0.5}})});
+  const PlanarCutResult r = cutter.result();
+  const Eigen::Matrix3d rotation = Eigen::AngleAxisd(0.4, Vec3(1, 1, 0).normalized()).toRotationMatrix();
+  Points nodes(r.mesh.mesh.num_nodes(), 3);
+  for (Index n = 0; n < nodes.rows(); ++n) {
+    const Vec3 flat(r.mesh.mesh.rest(n, 0), r.mesh.mesh.rest(n, 1), 0);
+    nodes.row(n) = (rotation * flat + Vec3(3, -1, 2)).transpose();
+  }
+  Points2 rest(3, 2);
+  rest << 0.3, 0.2, 0.9, 0.1, 0.6, 0.8;
+  Points world(3, 3);
+  for (Index i = 0; i < 3; ++i) world.row(i) = (rotation * Vec3(rest(i, 0), rest(i, 1), 0) + Vec3(3, -1, 2)).transpose();
+  const Points2 back = cutter.to_rest(world, nodes);
+  for (Index i = 0; i < 3; ++i) {
+    EXPECT_NEAR(back(i, 0), rest(i, 0), 1e-12);
+    EXPECT_NEAR(back(i, 1), rest(i, 1), 1e-12);
+  }
+  EXPECT_THROW(cutter.to_rest(world, Points(2, 3)), Error);
 }
 
 // Random polyline soups: segments between random points, grid nodes (through vertices), along
@@ -338,7 +346,7 @@ std::vector<Polyline> segments_of(const std::vector<Polyline>& soup) {
 TEST(PlanarCutter, RandomSoupsKeepInvariantsAndIgnoreOrderAndBatches) {
   std::mt19937 rng(20261202);
   const int n = 4;
-  const PlanarMesh mesh = grid_square(n);
+  const PlanarMesh mesh = make_planar_grid(n);
   for (int trial = 0; trial < 1000; ++trial) {
     SCOPED_TRACE("trial " + std::to_string(trial));
     const std::vector<Polyline> soup = random_soup(rng, n);

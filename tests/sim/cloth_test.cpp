@@ -2,6 +2,7 @@
 // the simulator on a hanging square, before and after a cut.
 
 #include <tetcut/cloth.hpp>
+#include <tetcut/generators.hpp>
 #include <tetcut/planar_cutter.hpp>
 
 #include <gtest/gtest.h>
@@ -109,24 +110,6 @@ TEST(ClothEnergy, HingeIsZeroOnAffineImagesAndMatchesTheDihedralEnergy) {
   }
 }
 
-// A 1 m square of 8 x 8 cells (128 triangles), lying in the x-y plane at z = 0.
-PlanarMesh square(int n) {
-  PlanarMesh mesh;
-  mesh.rest.resize((n + 1) * (n + 1), 2);
-  for (int j = 0; j <= n; ++j) {
-    for (int i = 0; i <= n; ++i) mesh.rest.row(j * (n + 1) + i) << 1.0 * i / n, 1.0 * j / n;
-  }
-  mesh.triangles.resize(2 * n * n, 3);
-  for (int j = 0; j < n; ++j) {
-    for (int i = 0; i < n; ++i) {
-      const Index a = j * (n + 1) + i, b = a + 1, c = a + n + 2, d = a + n + 1;
-      mesh.triangles.row(2 * (j * n + i)) << a, b, c;
-      mesh.triangles.row(2 * (j * n + i) + 1) << a, c, d;
-    }
-  }
-  return mesh;
-}
-
 // Rest (u, v) hung in the x-z plane: x = u, z = v (the top edge v = 1 at z = 1).
 Points hang(const PlanarMesh& mesh) {
   Points x(mesh.num_nodes(), 3);
@@ -136,7 +119,7 @@ Points hang(const PlanarMesh& mesh) {
 
 TEST(ClothSimulator, HangingClothSettlesToRest) {
   const int n = 8;
-  const PlanarMesh mesh = square(n);
+  const PlanarMesh mesh = make_planar_grid(n);
   PlanarCutter cutter(mesh);
   const PlanarCutResult cut = cutter.result();
   // Start flat and horizontal, pinned along the edge v = 1: it swings down and comes to rest
@@ -166,7 +149,7 @@ TEST(ClothSimulator, HangingClothSettlesToRest) {
 
 TEST(ClothSimulator, CutPieceFallsAndTheRestHangs) {
   const int n = 8;
-  const PlanarMesh mesh = square(n);
+  const PlanarMesh mesh = make_planar_grid(n);
   PlanarCutter cutter(mesh);
   ClothSimulator cloth(cutter.result().mesh, hang(mesh), ClothMaterial{});
   for (int i = 0; i <= n; ++i) cloth.pin(n * (n + 1) + i);
