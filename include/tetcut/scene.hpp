@@ -23,7 +23,7 @@
 //     "pin":       [{"box": [...]}]                     nodes whose rest position is in the box
 //     "move":      [{"box": [...], "velocity": [...], "from", "until"}]   kinematic nodes
 //     "obstacles": [{"plane": {"point", "normal"}} | {"sphere": {"centre", "radius"}}
-//                   | {"box": {"min", "max"}}],
+//                   | {"box": {"min", "max"}}, and optionally "friction": mu (Coulomb; 0 by default)],
 //     "contact_stiffness": K
 //     "self_collision": true | false | {"thickness": m, "stiffness": N/m, "friction": mu}   contact of the material
 //                   surface with itself and between pieces (Simulator::set_contact_surface); off

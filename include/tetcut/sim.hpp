@@ -159,15 +159,26 @@ struct EmbeddedPoint {
 };
 
 /// A solid obstacle the contact points are kept out of: half-space below a plane (`point`, outward
-/// `normal`), a ball, or an axis-aligned box.
+/// `normal`), a ball, or an axis-aligned box. With `friction` (a Coulomb coefficient) a point
+/// pressed into it is also held against sliding: smoothed and lagged as surface contact's friction
+/// (SurfaceContactOptions::friction), the normal force that of the penalty at the step's start,
+/// and slips below a thousandth of the mesh's mean edge length per step resisted as by a stiff
+/// spring (static friction).
 struct Obstacle {
   enum class Kind { kPlane, kSphere, kBox } kind = Kind::kPlane;
   Vec3 point = Vec3::Zero();            ///< plane: a point on it; sphere: the centre; box: min corner
   Vec3 normal = Vec3(0, 0, 1);          ///< plane: outward normal; box: max corner
   double radius = 0;                    ///< sphere
-  static Obstacle plane(const Vec3& point, const Vec3& normal) { return {Kind::kPlane, point, normal.normalized(), 0}; }
-  static Obstacle sphere(const Vec3& centre, double radius) { return {Kind::kSphere, centre, Vec3::Zero(), radius}; }
-  static Obstacle box(const Vec3& min, const Vec3& max) { return {Kind::kBox, min, max, 0}; }
+  double friction = 0;                  ///< Coulomb coefficient (0: frictionless)
+  static Obstacle plane(const Vec3& point, const Vec3& normal) { return {Kind::kPlane, point, normal.normalized(), 0, 0}; }
+  static Obstacle sphere(const Vec3& centre, double radius) { return {Kind::kSphere, centre, Vec3::Zero(), radius, 0}; }
+  static Obstacle box(const Vec3& min, const Vec3& max) { return {Kind::kBox, min, max, 0, 0}; }
+  /// The same obstacle with friction coefficient `mu`.
+  Obstacle with_friction(double mu) const {
+    Obstacle o = *this;
+    o.friction = mu;
+    return o;
+  }
   /// Signed distance of x from the obstacle's surface (negative inside) and the outward direction
   /// there.
   double distance(const Vec3& x, Vec3* direction) const;
@@ -190,7 +201,7 @@ struct SurfaceContactOptions {
   /// Coulomb friction coefficient between parts of the surface (0: none), smoothed and lagged
   /// as in IPC: each step takes the normals and normal forces of the pairs in contact at its
   /// start, and slips below a hundredth of the thickness are resisted as by a stiff spring
-  /// (static friction). Not against obstacles yet.
+  /// (static friction). Against obstacles: Obstacle::friction.
   double friction = 0;
 };
 
@@ -252,6 +263,7 @@ class Simulator {
   /// penetration depth d, a soft constraint that the implicit step treats like any other energy.
   /// Error(kInvalidArgument) when a point names a tet that does not exist.
   void set_contact_points(std::vector<EmbeddedPoint> points);
+  /// Error(kInvalidArgument) for a negative or non-finite friction coefficient.
   void add_obstacle(const Obstacle& obstacle);
   /// N/m; by default 10 E h, with h the mean edge length of the mesh the simulator was made with.
   void set_contact_stiffness(double stiffness);

@@ -122,6 +122,7 @@ void bind_sim(py::module_& root) {
                   py::arg("centre"), py::arg("radius"))
       .def_static("box", [](py::handle min, py::handle max) { return Obstacle::box(vec3(min, "min"), vec3(max, "max")); },
                   py::arg("min"), py::arg("max"))
+      .def_readwrite("friction", &Obstacle::friction, "Coulomb coefficient of points pressed into it (0: frictionless)")
       .def("distance", [](const Obstacle& o, py::handle x) {
              Vec3 direction;
              const double d = o.distance(vec3(x, "x"), &direction);

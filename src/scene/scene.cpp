@@ -394,7 +394,7 @@ Scene parse_scene(std::string_view text, const std::filesystem::path& path) {
   }
   if (const auto obstacles = root.get("obstacles")) {
     for (const Value& o : obstacles->array()) {
-      o.allow({"plane", "sphere", "box"});
+      o.allow({"plane", "sphere", "box", "friction"});
       if (o.has("plane") + o.has("sphere") + o.has("box") != 1) o.fail("give exactly one of 'plane', 'sphere' or 'box'");
       if (const auto plane = o.get("plane")) {
         plane->allow({"point", "normal"});
@@ -409,6 +409,7 @@ Scene parse_scene(std::string_view text, const std::filesystem::path& path) {
         if (!((lo.array() < hi.array()).all())) box.fail("'min' must be below 'max' on every axis");
         scene.obstacles.push_back(sim::Obstacle::box(lo, hi));
       }
+      if (const auto mu = o.get("friction")) scene.obstacles.back().friction = mu->non_negative();
     }
   }
   if (const auto k = root.get("contact_stiffness")) scene.contact_stiffness = k->positive();

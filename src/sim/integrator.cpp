@@ -201,6 +201,12 @@ StepReport Simulator::minimise(const StepOptions& options, bool inertia) {
     if (s.constraint[v] >= 0) x.row(v) = s.target.row(v);
   }
   StepReport report;
+  // Friction against obstacles acts over this step with the contacts of its start (lagged).
+  if (inertia) {
+    s.lag_obstacle_friction();
+  } else {
+    s.obstacle_friction.clear();
+  }
   // With surface contact the start is where no two parts of the surface touch; the first guess
   // may not go beyond where two would meet (the kinematic nodes then go only part of the way
   // this step).

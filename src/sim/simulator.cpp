@@ -82,7 +82,8 @@ Simulator::Simulator(const TetMesh& mesh, const Material& material, std::span<co
   for (const SimulatorState::Element& e : s.elements) {
     for (const auto& edge : kTetEdges) edges += (mesh.rest().row(e.nodes[edge[0]]) - mesh.rest().row(e.nodes[edge[1]])).norm();
   }
-  s.contact_stiffness = s.elements.empty() ? 0 : 10 * material.youngs_modulus * edges / (6.0 * static_cast<double>(s.elements.size()));
+  s.mean_edge = s.elements.empty() ? 0 : edges / (6.0 * static_cast<double>(s.elements.size()));
+  s.contact_stiffness = 10 * material.youngs_modulus * s.mean_edge;
 }
 
 Simulator::Simulator(const Simulator& other) : state_(std::make_unique<SimulatorState>(*other.state_)) {}
@@ -143,7 +144,31 @@ void Simulator::set_contact_points(std::vector<EmbeddedPoint> points) {
   }
   state_->contact_points = std::move(points);
 }
-void Simulator::add_obstacle(const Obstacle& obstacle) { state_->obstacles.push_back(obstacle); }
+void Simulator::add_obstacle(const Obstacle& obstacle) {
+  if (!(obstacle.friction >= 0) || !std::isfinite(obstacle.friction)) {
+    throw Error(ErrorKind::kInvalidArgument, "obstacle: the friction coefficient must be a number, not negative");
+  }
+  state_->obstacles.push_back(obstacle);
+}
+
+void SimulatorState::lag_obstacle_friction() {
+  obstacle_friction.clear();
+  for (const EmbeddedPoint& point : contact_points) {
+    ObstacleFriction f;
+    f.nodes = elements[static_cast<std::size_t>(point.tet)].nodes;
+    f.weights = point.weights;
+    f.start = Vec3::Zero();
+    for (int k = 0; k < 4; ++k) f.start += f.weights[k] * start.row(f.nodes[k]).transpose();
+    for (const Obstacle& obstacle : obstacles) {
+      if (!(obstacle.friction > 0)) continue;
+      const double d = obstacle.distance(f.start, &f.normal);
+      if (d >= 0) continue;
+      f.normal_force = -contact_stiffness * d;
+      f.mu = obstacle.friction;
+      obstacle_friction.push_back(f);
+    }
+  }
+}
 void Simulator::set_contact_stiffness(double stiffness) {
   if (!(stiffness >= 0) || !std::isfinite(stiffness)) throw Error(ErrorKind::kInvalidArgument, "contact stiffness must not be negative");
   state_->contact_stiffness = stiffness;
@@ -263,6 +288,7 @@ void SimulatorState::carry_new_nodes(Index first_new_node, std::span<const Index
   // Springs, anchors, contact points and the contact surface name tets and barycentric weights
   // that a cut may change (the surface contact keeps its joins of copies: their ids stay).
   contact_points.clear();
+  obstacle_friction.clear();
   surface_contact.clear_surface();
   surface_contact.clear_sutures();
   springs.clear();

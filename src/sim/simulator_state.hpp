@@ -17,6 +17,10 @@
 namespace tetcut::sim {
 
 struct SimulatorState {
+  // Obstacle friction's smoothing: slips below this share of the mean edge length per step are
+  // static (a thousandth: as surface contact's hundredth of its thickness, a tenth of an edge).
+  static constexpr double kStaticSlipShare = 1e-3;
+
   struct Element {
     std::array<Index, 4> nodes;
     detail::ShapeWeights weights;  // dF/dx: F = sum_a x_a w_a^T
@@ -32,7 +36,18 @@ struct SimulatorState {
   std::vector<Element> elements;  // by tet id
   std::vector<EmbeddedPoint> contact_points;
   std::vector<Obstacle> obstacles;
+  // Friction against obstacles over the current step, lagged as surface contact's: per contact
+  // point pressed into an obstacle with friction at the step's start, the obstacle's normal
+  // there, the penalty's normal force, the point's position then and the coefficient.
+  struct ObstacleFriction {
+    std::array<Index, 4> nodes;
+    Eigen::Vector4d weights;
+    Vec3 normal, start;
+    double normal_force, mu;
+  };
+  std::vector<ObstacleFriction> obstacle_friction;
   double contact_stiffness = 0;
+  double mean_edge = 0;  // of the mesh the simulator was made with: the length friction's smoothing follows
   bool contact_stiffness_given = false;
   std::vector<Spring> springs;
   std::vector<Simulator::Anchor> anchors;
@@ -168,6 +183,10 @@ struct SimulatorState {
   /// updates the elements' SVD warm starts. Needs a fresh structure (refresh_structure).
   double assemble_hessian(const Points& at, std::vector<double>* gradient);
 
+  /// Lags obstacle friction for the step starting at `start` (see obstacle_friction). O(points x
+  /// obstacles).
+  void lag_obstacle_friction();
+
   /// The soft constraints as energies of one point y = sum_i c_i x_{n_i} (up to 16 nodes: a
   /// surface contact pair's y is the vector between its closest points); calls
   /// visit(nodes, coefficients, count, energy, dE/dy, d2E/dy2) for each active one at `at`.
@@ -194,6 +213,20 @@ void SimulatorState::for_each_constraint(const Points& at, Visit&& visit) const 
       visit(nodes, coefficients, 4, 0.5 * contact_stiffness * d * d, Vec3(contact_stiffness * d * n),
             Mat3(contact_stiffness * n * n.transpose()));
     }
+  }
+  // Slips below this per step are held as by a stiff spring (see Obstacle::friction).
+  const double static_slip = kStaticSlipShare * mean_edge;
+  for (const ObstacleFriction& f : obstacle_friction) {
+    Vec3 u = -f.start;
+    for (int k = 0; k < 4; ++k) {
+      nodes[k] = f.nodes[k];
+      coefficients[k] = f.weights[k];
+      u += coefficients[k] * at.row(nodes[k]).transpose();
+    }
+    Vec3 g;
+    Mat3 matrix;
+    const double energy = detail::lagged_friction(u, f.normal, f.normal_force, f.mu, static_slip, &g, &matrix);
+    visit(nodes, coefficients, 4, energy, g, matrix);
   }
   for (const Simulator::Anchor& anchor : anchors) {
     Vec3 y = Vec3::Zero();

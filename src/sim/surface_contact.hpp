@@ -80,6 +80,11 @@ double pair_energy(const std::array<Vec3, 4>& y, bool edges, double dhat, double
 /// eps). Returns D; the exact gradient and Hessian in u when asked.
 double friction_energy(const Vec3& u, const Vec3& n, double normal_force, double mu, double eps, Vec3* gradient = nullptr,
                        Mat3* hessian = nullptr);
+/// The same as a soft-constraint term of the Newton system: D, dD/du and, for the matrix, the
+/// positive semi-definite mu lambda f1(y)/y (I - n n^T) (IPC's choice: the exact Hessian's other
+/// part, along the slip, is negative where the friction force saturates). For surface pairs and
+/// for points pressed into obstacles alike.
+double lagged_friction(const Vec3& u, const Vec3& n, double normal_force, double mu, double eps, Vec3* gradient, Mat3* matrix);
 
 /// One pair as a soft constraint: r = sum_i coefficients[i] x_{nodes[i]} (count distinct nodes).
 struct ContactTerm {
@@ -243,11 +248,9 @@ void SurfaceContact::for_each_friction(const Points& at, Visit&& visit) const {
     Vec3 u = -f.start;
     for (int a = 0; a < f.term.count; ++a) u += f.term.coefficients[a] * at.row(f.term.nodes[a]).transpose();
     Vec3 g;
-    const double energy = friction_energy(u, f.normal, f.normal_force, settings_.friction, eps, &g);
-    const Mat3 P = Mat3::Identity() - f.normal * f.normal.transpose();
-    const double y = (P * u).norm();
-    const double f1_over_y = y < eps ? 2 / eps - y / (eps * eps) : 1 / y;
-    visit(f.term, energy, g, Mat3(settings_.friction * f.normal_force * f1_over_y * P));
+    Mat3 matrix;
+    const double energy = lagged_friction(u, f.normal, f.normal_force, settings_.friction, eps, &g, &matrix);
+    visit(f.term, energy, g, matrix);
   }
 }
 

@@ -92,6 +92,34 @@ def test_a_block_falls_onto_a_plane_and_stops_there():
     assert d == pytest.approx(1) and direction.tolist() == [0, 0, 1]
 
 
+def slide(mu):
+    V, T = block(2)
+    s = sim.Simulator(V, T, sim.Material(youngs_modulus=1e6, density=DENSITY))
+    surface = tetcut.Cutter(V, T).surface()
+    s.set_contact_points(surface.vertex_tet, surface.vertex_weights)
+    ground = sim.Obstacle.plane((0, 0, 0), (0, 0, 1))
+    ground.friction = mu
+    s.add_obstacle(ground)
+    for _ in range(20):
+        s.step(sim.StepOptions(dt=0.005))
+    v = s.velocities.copy()
+    v[:, 0] = 1
+    s.velocities = v
+    start = s.positions[:, 0].mean()
+    for _ in range(60):
+        s.step(sim.StepOptions(dt=0.005))
+    return s.positions[:, 0].mean() - start
+
+
+def test_friction_against_an_obstacle_stops_a_sliding_block():
+    assert slide(0.5) < 0.5 * slide(0.0)
+    with pytest.raises(tetcut.Error):
+        s = sim.Simulator(*block(1), sim.Material())
+        bad = sim.Obstacle.plane((0, 0, 0), (0, 0, 1))
+        bad.friction = -1
+        s.add_obstacle(bad)
+
+
 def test_moves_springs_and_anchors():
     V, T = block(2)
     s = sim.Simulator(V, T, sim.Material(youngs_modulus=1e4, density=DENSITY))

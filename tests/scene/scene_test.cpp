@@ -64,8 +64,20 @@ TEST(Scene, ErrorsNameTheKey) {
   EXPECT_NE(load_error(std::string("{") + kCube + "," + time + R"(, "output": {"picture": {"zoom": 2}}})")
                 .find("output.picture: unknown key 'zoom'"),
             std::string::npos);
+  EXPECT_NE(load_error(std::string("{") + kCube + "," + time + R"(, "obstacles": [{"plane": {"point": [0,0,0], "normal": [0,0,1]}, "friction": -1}]})")
+                .find("obstacles[0].friction: must not be negative"),
+            std::string::npos);
   EXPECT_NE(load_error("{ \"mesh\": ").find("not valid JSON"), std::string::npos);
   EXPECT_NE(load_error(R"({"time": {"duration": 1}})").find("missing key 'mesh'"), std::string::npos);
+}
+
+TEST(Scene, ObstacleFrictionIsRead) {
+  testing::TempDir dir;
+  const Scene scene = load_scene(write_scene(dir.path(), std::string("{") + kCube + R"(, "time": {"duration": 0.1},
+    "obstacles": [{"plane": {"point": [0, 0, 0], "normal": [0, 0, 1]}, "friction": 0.6}, {"sphere": {"centre": [0, 0, 0], "radius": 1}}]})"));
+  ASSERT_EQ(scene.obstacles.size(), 2u);
+  EXPECT_EQ(scene.obstacles[0].friction, 0.6);
+  EXPECT_EQ(scene.obstacles[1].friction, 0.0);
 }
 
 TEST(Scene, PictureCameraIsRead) {

@@ -189,6 +189,49 @@ TEST_P(Integrator, CubeComesToRestOnTheGround) {
   EXPECT_LT(sim.velocities().cwiseAbs().maxCoeff(), 1e-3);
 }
 
+// A block resting on the ground is pushed sideways at v0: with friction mu it slides
+// v0^2 / (2 mu g) and stops (Coulomb); without, it keeps going.
+double slide_on_the_ground(Model model, double mu, Vec3* final_velocity) {
+  const TetMesh block = make_grid(Box{Vec3(0, 0, 0), Vec3(0.2, 0.2, 0.1)}, {2, 2, 1}, 5);
+  Material material;
+  material.model = model;
+  material.youngs_modulus = 1e6;
+  Simulator sim(block, material);
+  std::vector<EmbeddedPoint> points;
+  for (Index t = 0; t < block.num_tets(); ++t) {
+    for (int k = 0; k < 4; ++k) {
+      EmbeddedPoint p{t, Eigen::Vector4d::Zero()};
+      p.weights[k] = 1;
+      points.push_back(p);
+    }
+  }
+  sim.set_contact_points(points);
+  sim.add_obstacle(Obstacle::plane(Vec3::Zero(), Vec3(0, 0, 1)).with_friction(mu));
+  StepOptions options;
+  options.dt = 0.005;
+  // Settle onto the ground first, so that the normal force carries the weight.
+  for (int s = 0; s < 40; ++s) sim.step(options);
+  const auto centre_x = [&] { return sim.positions().col(0).mean(); };
+  const double start = centre_x();
+  Points v = sim.velocities();
+  v.col(0).setConstant(1.0);
+  sim.set_velocities(v);
+  for (int s = 0; s < 80; ++s) EXPECT_TRUE(sim.step(options).converged) << "step " << s;  // 0.4 s
+  *final_velocity = Vec3(sim.velocities().col(0).mean(), sim.velocities().col(1).mean(), sim.velocities().col(2).mean());
+  return centre_x() - start;
+}
+
+TEST_P(Integrator, FrictionOnTheGroundStopsASlidingBlockAsCoulombSays) {
+  Vec3 velocity;
+  const double mu = 0.5, stopping = 1.0 / (2 * mu * 9.81);  // 0.102 m, after 0.204 s
+  const double slid = slide_on_the_ground(GetParam(), mu, &velocity);
+  EXPECT_NEAR(slid, stopping, 0.1 * stopping);
+  EXPECT_LT(velocity.norm(), 0.02);  // at rest
+  const double free = slide_on_the_ground(GetParam(), 0, &velocity);
+  EXPECT_GT(free, 0.35);  // 0.4 m at 1 m/s, less what the settling left
+  EXPECT_NEAR(velocity.x(), 1.0, 0.05);
+}
+
 TEST_P(Integrator, SpringsKeepAnIncisionClosed) {
   // A block cut from the top down to half its height by x = 0.51; its top corners are pulled apart
   // sideways. Without springs the incision opens; with springs between its two sides it stays shut.
@@ -588,6 +631,9 @@ TEST(Simulator, RejectsBadParameters) {
   EXPECT_THROW(Simulator(cube, bad), Error);
   std::vector<double> fractions(3, 1.0);
   EXPECT_THROW(Simulator(cube, Material{}, fractions), Error);
+  Simulator sim(cube, Material{});
+  EXPECT_THROW(sim.add_obstacle(Obstacle::plane(Vec3::Zero(), Vec3(0, 0, 1)).with_friction(-0.1)), Error);
+  EXPECT_THROW(sim.add_obstacle(Obstacle::sphere(Vec3::Zero(), 1).with_friction(std::nan(""))), Error);
 }
 
 }  // namespace
