@@ -40,9 +40,14 @@ struct SurfaceIntersections {
 ///   passes its solver's noise, since the two sides of a cut, free to drift, wander around each
 ///   other by about its tolerance before anything opens them); and pairs on the two
 ///   sides of one cut triangle whose six corners are all such unopened points (the two sides'
-///   triangulations of a polygon overlap without always sharing a corner). So the two sides of
-///   a fresh cut, which coincide, are not counted, and are as soon as they have moved apart and
-///   cross.
+///   triangulations of a polygon overlap without always sharing a corner); and pairs that touch
+///   in the material (decided exactly) and now cross by at most `opened` (one reaches no further
+///   than that behind the other, the material being behind each: the sides of a cut pressed
+///   together, which slide along each other as each bulges). So the two sides of a fresh cut,
+///   which coincide, are not counted, and are as soon as they have moved apart and cross, or
+///   pressed together, go into each other by more than `opened`. A simulation with surface
+///   contact passes the fresh-cut allowance of its guards (a hundredth of an edge; see
+///   Simulator::SurfaceContactState).
 /// Broad phase: a box hierarchy over the triangles; O(F log F + candidates), parallel. Throws
 /// Error(kInvalidArgument) when `positions` has the wrong size or a triangle names a copy that
 /// `copy_nodes` lacks.

@@ -274,7 +274,8 @@ class Simulator {
   /// Newton step is shortened so that no pair reaches distance 0 (continuous collision detection):
   /// parts of the surface never pass through each other. Not counted: pairs of copies that are
   /// neighbours (share a node), copies a cut has just separated until their surfaces have moved
-  /// apart, and, while springs (add_spring) suture an incision, pairs between the copies they
+  /// apart (their vertices are only guarded against going more than a tenth of the thickness
+  /// behind the other side's triangles), and, while springs (add_spring) suture an incision, pairs between the copies they
   /// hold that were within the thickness of each other in the material (the springs pull them
   /// back together) (see src/sim/surface_contact.hpp for the rule and why it cannot miss a
   /// collision for long). Give the surface again after every cut (remesh drops it, as it drops
@@ -284,12 +285,14 @@ class Simulator {
   /// No surface contact (and no memory of the copies a cut joined).
   void clear_contact_surface();
   /// What surface contact is working with: the thickness and stiffness in use, the candidate
-  /// pairs of its broad phase, the pairs of copies still joined across a cut, and how often
-  /// the broad phase was rebuilt.
+  /// pairs of its broad phase, the pairs of copies still joined across a cut, the guards over
+  /// them in the last step, and how often the broad phase was rebuilt; and how far the two sides
+  /// of a fresh cut may press into each other (a tenth of the thickness: what their guards hold
+  /// each vertex to; see src/sim/surface_contact.hpp).
   struct SurfaceContactState {
     bool enabled = false;
-    double thickness = 0, stiffness = 0;
-    Index candidates = 0, joined_copy_pairs = 0, rebuilds = 0;
+    double thickness = 0, stiffness = 0, fresh_cut_allowance = 0;
+    Index candidates = 0, joined_copy_pairs = 0, guards = 0, rebuilds = 0;
   };
   SurfaceContactState surface_contact() const;
   /// The surface contact energy at the current positions (+inf if two counted parts touch).

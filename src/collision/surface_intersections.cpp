@@ -20,6 +20,33 @@
 namespace tetcut {
 namespace {
 
+// How far triangle `a` reaches behind triangle `b`, both oriented outward (the material is behind
+// each): the largest distance behind b's plane of the part of `a` that lies over b (a clipped to
+// the prism over b). 0 where b is flat or no part of `a` lies over it. Floating point: a depth.
+double reach_behind(const std::array<Vec3, 3>& a, const std::array<Vec3, 3>& b) {
+  const Vec3 n = (b[1] - b[0]).cross(b[2] - b[0]);
+  const double length = n.norm();
+  if (!(length > 0)) return 0;
+  const Vec3 unit = n / length;
+  // Clip by the prism's three sides (each through an edge of b, along its normal, facing in).
+  std::vector<Vec3> polygon(a.begin(), a.end()), clipped;
+  for (int e = 0; e < 3 && !polygon.empty(); ++e) {
+    const Vec3 p = b[e], inward = unit.cross(b[(e + 1) % 3] - p);
+    clipped.clear();
+    for (std::size_t i = 0; i < polygon.size(); ++i) {
+      const Vec3& u = polygon[i];
+      const Vec3& w = polygon[(i + 1) % polygon.size()];
+      const double su = inward.dot(u - p), sw = inward.dot(w - p);
+      if (su >= 0) clipped.push_back(u);
+      if ((su < 0) != (sw < 0)) clipped.push_back(u + (w - u) * (su / (su - sw)));
+    }
+    polygon.swap(clipped);
+  }
+  double deepest = 0;
+  for (const Vec3& p : polygon) deepest = std::max(deepest, -unit.dot(p - b[0]));
+  return deepest;
+}
+
 }  // namespace
 
 SurfaceIntersections count_surface_intersections(const MaterialSurface& surface, std::span<const std::array<Index, 4>> copy_nodes,
@@ -65,6 +92,20 @@ SurfaceIntersections count_surface_intersections(const MaterialSurface& surface,
     }
     return true;
   };
+  // Two sides of a cut pressed into each other, less than `opened` deep: triangles that touch in
+  // the material (decided exactly) and now cross no deeper than that (either reaches at most
+  // `opened` behind the other). Pressed together, the sides of a cut slide along each other
+  // (each bulges as it is squeezed), so their twin points part while the cut stays closed.
+  const auto pressed_cut = [&](Index a, Index b, const std::array<Vec3, 3>& ca, const std::array<Vec3, 3>& cb) {
+    const auto rest = [&](Index t) {
+      return std::array<Vec3, 3>{s.vertices.row(s.triangles(t, 0)).transpose(), s.vertices.row(s.triangles(t, 1)).transpose(),
+                                 s.vertices.row(s.triangles(t, 2)).transpose()};
+    };
+    if (!(std::min(reach_behind(ca, cb), reach_behind(cb, ca)) <= opened)) return false;
+    const auto ra = rest(a), rb = rest(b);
+    if (geometry::collinear(ra[0], ra[1], ra[2]) || geometry::collinear(rb[0], rb[1], rb[2])) return false;
+    return triangles_intersect(ra, rb);
+  };
   std::vector<spatial::Aabb> boxes(static_cast<std::size_t>(F));
   std::vector<std::uint8_t> degenerate(static_cast<std::size_t>(F), 0);
   const auto corners = [&](Index t) {
@@ -101,7 +142,9 @@ SurfaceIntersections count_surface_intersections(const MaterialSurface& surface,
         for (int i = 0; i < 3 && !shared; ++i) {
           for (int j = 0; j < 3 && !shared; ++j) shared = weld[static_cast<std::size_t>(s.triangles(a, i))] == weld[static_cast<std::size_t>(s.triangles(b, j))];
         }
-        if (shared || !triangles_intersect(ca, corners(b))) continue;
+        if (shared) continue;
+        const auto cb = corners(b);
+        if (!triangles_intersect(ca, cb) || pressed_cut(a, b, ca, cb)) continue;
         ++mine.intersecting;
         mine.examples.push_back({a, b});
       }

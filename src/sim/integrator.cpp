@@ -219,6 +219,8 @@ StepReport Simulator::minimise(const StepOptions& options, bool inertia) {
     } else {
       s.surface_contact.drop_friction();
     }
+    // The two sides of fresh cuts are guarded against passing through each other over the step.
+    s.surface_contact.lag_guards(s.start);
     s.displacement = x - s.start;
     const double t = s.surface_contact.max_step(s.start, s.displacement.data());
     if (t < 1) {

@@ -217,6 +217,8 @@ Simulator::SurfaceContactState Simulator::surface_contact() const {
   out.stiffness = c.settings().stiffness;
   out.candidates = c.num_candidates();
   out.joined_copy_pairs = c.num_joins();
+  out.guards = c.num_guards();
+  out.fresh_cut_allowance = c.enabled() ? c.guard_allowance() : 0.0;
   out.rebuilds = c.num_rebuilds();
   return out;
 }

@@ -22,6 +22,25 @@ constexpr double kAdvanceShare = 0.9;
 // Conservative advancement gives up refining after this many advances and keeps the safe time
 // reached (a pair sliding along another approaches slowly; the next Newton iteration goes on).
 constexpr int kMaxAdvances = 64;
+// A triangle whose height is below this share of its longest edge, or of the contact thickness
+// where that is longer, has no normal a guard could use: fans over the surface's polygons make
+// triangles of collinear points and of points a rounding apart (exactly, in the material), whose
+// rounded corners give them a normal in any direction.
+constexpr double kFlat = 1e-6;
+// A guard's vertex may lie beside its triangle by up to the triangle's size (its barycentric
+// coordinates down to -1).
+constexpr double kBeside = 1;
+
+// The unit normal of triangle (a, b, c), or zero where it is flat for a scale of `length`.
+Vec3 unit_normal(const Vec3& a, const Vec3& b, const Vec3& c, double length) {
+  const Vec3 n = (b - a).cross(c - a);
+  const double longest = std::sqrt(std::max({(b - a).squaredNorm(), (c - b).squaredNorm(), (a - c).squaredNorm()}));
+  return n.norm() > kFlat * longest * std::max(longest, length) ? Vec3(n.normalized()) : Vec3::Zero();
+}
+
+// A guard's vertex faces its triangle when one of its triangles' normals makes an angle of more
+// than 120 degrees with the triangle's in the material (the two sides of a cut: 180).
+constexpr double kFacing = 0.5;
 
 std::uint64_t copy_pair(Index a, Index b) {
   const auto lo = static_cast<std::uint64_t>(std::min(a, b)), hi = static_cast<std::uint64_t>(std::max(a, b));
@@ -130,6 +149,7 @@ void SurfaceContact::clear_surface() {
   candidates_.clear();
   proximities_.clear();
   friction_.clear();
+  guards_.clear();
   rho_ = -1;
   tree_built_ = false;
   group_copy_.clear();
@@ -197,6 +217,22 @@ void SurfaceContact::set_surface(const MaterialSurface& surface, std::span<const
   settings_.stiffness = options.stiffness > 0 ? options.stiffness : youngs_modulus * mean_edge_;
   settings_.friction = options.friction;
   rest_y_ = s.vertices;
+  // Rest normals and each vertex's triangles, for the guards (lag_guards).
+  rest_normals_.resize(F);
+  vertex_triangle_start_.assign(V + 1, 0);
+  for (std::size_t t = 0; t < F; ++t) {
+    const auto& c = triangles_[t];
+    rest_normals_[t] = unit_normal(rest_y_.row(c[0]).transpose(), rest_y_.row(c[1]).transpose(), rest_y_.row(c[2]).transpose(), settings_.thickness);
+    for (const Index v : c) ++vertex_triangle_start_[static_cast<std::size_t>(v) + 1];
+  }
+  for (std::size_t v = 0; v < V; ++v) vertex_triangle_start_[v + 1] += vertex_triangle_start_[v];
+  vertex_triangles_.resize(3 * F);
+  {
+    std::vector<Index> fill(vertex_triangle_start_.begin(), vertex_triangle_start_.end() - 1);
+    for (std::size_t t = 0; t < F; ++t) {
+      for (const Index v : triangles_[t]) vertex_triangles_[static_cast<std::size_t>(fill[static_cast<std::size_t>(v)]++)] = static_cast<Index>(t);
+    }
+  }
   group_primitives();
   if (!enabled() || !(settings_.thickness > 0)) return;
 
@@ -548,7 +584,62 @@ double SurfaceContact::max_step(const Points& from, const double* direction) {
     }
     smallest[static_cast<std::size_t>(chunk)] = t_min;
   });
-  return *std::min_element(smallest.begin(), smallest.end());
+  double t_guard = 1;
+  const double delta = guard_allowance();
+  for (const Guard& guard : guards_) {
+    double g = 0, rate = 0;
+    for (int a = 0; a < guard.term.count; ++a) {
+      const auto node = static_cast<std::size_t>(guard.term.nodes[a]);
+      const Vec3 x(from.row(guard.term.nodes[a]).transpose()), d(direction[3 * node], direction[3 * node + 1], direction[3 * node + 2]);
+      g += guard.term.coefficients[a] * guard.normal.dot(x);
+      rate += guard.term.coefficients[a] * guard.normal.dot(d);
+    }
+    // g is linear along the step: stop where all but kKeepShare of what was left of the
+    // allowance is used up.
+    if (rate < 0) t_guard = std::min(t_guard, std::max(0.0, (1 - kKeepShare) * (g + delta) / -rate));
+  }
+  return std::min(t_guard, *std::min_element(smallest.begin(), smallest.end()));
+}
+
+void SurfaceContact::lag_guards(const Points& start) {
+  guards_.clear();
+  if (!enabled() || joins_.empty()) return;
+  cover(start, 0);
+  measure();
+  const double dhat = settings_.thickness, delta = guard_allowance();
+  for (std::size_t k = 0; k < candidates_.size(); ++k) {
+    const Candidate& c = candidates_[k];
+    if (!c.joined || c.sutured || c.edges || !(proximities_[k].distance < dhat)) continue;
+    const std::array<Index, 4> corner = corners(c);
+    const Vec3 p = y_.row(corner[0]).transpose(), a = y_.row(corner[1]).transpose(), b = y_.row(corner[2]).transpose(),
+               q = y_.row(corner[3]).transpose();
+    // Only a vertex whose surface faces the triangle in the material: the other side of the cut
+    // (one of the vertex's triangles turned against the triangle's), not a neighbour of the
+    // triangle on its own side, which may lie beside it and below its plane.
+    const Vec3& facing = rest_normals_[static_cast<std::size_t>(c.b)];
+    if (facing.isZero()) continue;
+    bool faces = false;
+    for (Index i = vertex_triangle_start_[corner[0]]; i < vertex_triangle_start_[corner[0] + 1] && !faces; ++i) {
+      faces = rest_normals_[static_cast<std::size_t>(vertex_triangles_[i])].dot(facing) < -kFacing;
+    }
+    if (!faces) continue;
+    const Vec3 normal = unit_normal(a, b, q, dhat);  // outward: the triangle's material is behind it
+    if (normal.isZero()) continue;
+    const Vec3 cross = (b - a).cross(q - a);
+    const double area2 = cross.squaredNorm();
+    // The vertex's foot on the triangle's plane in barycentric coordinates, also where it lies
+    // beside the triangle (within dhat of it): on the rim of a cut, where both sides bulge as
+    // they are pressed together, a vertex slips past the edge of the triangles it lay on.
+    const Vec3 ap = p - a;
+    const double beta_b = cross.dot(ap.cross(q - a)) / area2, beta_c = cross.dot((b - a).cross(ap)) / area2;
+    const double beta_a = 1 - beta_b - beta_c;
+    if (std::min({beta_a, beta_b, beta_c}) < -kBeside) continue;
+    const double g = normal.dot(p - (beta_a * a + beta_b * b + beta_c * q));
+    if (!(g > -delta)) continue;  // already behind: nothing a guard could hold
+    collision::Proximity foot;
+    foot.w = {1.0, -beta_a, -beta_b, -beta_c};
+    guards_.push_back({term(c, foot), normal});
+  }
 }
 
 void SurfaceContact::update_joins(const Points& at) {

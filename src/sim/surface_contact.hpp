@@ -30,12 +30,32 @@
 // distance 0 now: touching from the start; separate objects that merely start close are not
 // joined). The join lasts until no
 // pair of their primitives is within dhat any more (checked after every step); from then on the
-// copies collide like any others. Why this cannot miss a real collision for long: copies are
-// joined only while some of their surfaces are still touching where they were cut apart, and a
-// copy spans one tet, so what goes unseen is confined to the two sides of a cut within a tet of
-// each other, and ends as soon as they have opened there. Sutures (springs across an incision)
-// likewise take the pairs between their copies that were within dhat in the material out, while
-// they hold: they are there to bring the two sides back together.
+// copies collide like any others.
+//
+// Guards. While joined, the two sides of a cut are not left free to pass through each other:
+// each step, every vertex-triangle pair of joined copies within dhat at its start, whose vertex
+// faces the triangle in the material (one of the vertex's triangles turned more than 120 degrees
+// against it: the other side of the cut, not the triangle's own neighbour) gets a guard, a
+// one-sided barrier on the vertex's signed distance g in front of the triangle's plane,
+//     kappa b(g + delta; delta)  for -delta < g < 0,  0 for g >= 0,
+// with the triangle's unit normal and the vertex's foot on its plane (barycentric coordinates,
+// which may lie beside the triangle by up to its size: pressed together, both sides bulge and a
+// vertex on the rim slips past the edge of the triangles it lay on) held for the step, so that g
+// is linear in the nodes and the term is exact with a positive semi-definite Hessian. Its zero
+// is the fresh cut itself (g = 0), and the allowance delta = dhat / 10 is how far one side may be
+// pressed into the other; conservative advancement keeps every guard's g above -delta in the
+// line search, as it keeps the pairs' distances above 0. Triangles too flat for a normal (height
+// below 1e-6 of their longest edge, or of dhat: fans over collinear points) guard nothing.
+// Pulled apart, guards exert no force (g > 0), and the join ends once no pair is within dhat.
+// Why this cannot miss a real collision for long: copies are joined only while some of their
+// surfaces are still touching where they were cut apart; a copy spans one tet, so only the two
+// sides of a cut within a tet of each other are affected, and there they are guarded, not
+// ignored; what goes unseen is edge-edge crossings of joined copies and vertices that do not face
+// the triangle they approach (a cut's rim meeting the other side's outer surface), bounded by
+// the allowance where their neighbours are guarded, and counted by the exact check
+// (count_surface_intersections) if they go deeper. Sutures (springs across an incision)
+// take the pairs between their copies that were within dhat in the material out, guards
+// included, while they hold: they are there to bring the two sides back together.
 //
 // Broad phase: per copy, a box around the primitives it owns (a vertex's copy, a triangle's, an
 // edge's first triangle's), in a hierarchy refitted at each rebuild; pairs of copies whose boxes
@@ -140,6 +160,16 @@ class SurfaceContact {
   /// After a step, at its final positions: joins whose copies have no pair within dhat end.
   void update_joins(const Points& at);
 
+  /// The guards of the joined pairs for the step starting at `start` (see "Guards" above): each
+  /// vertex-triangle pair of joined copies within dhat there whose vertex lies over the triangle
+  /// and not behind it by more than the allowance, with the triangle's normal and the vertex's
+  /// foot on it held for the step. O(candidates).
+  void lag_guards(const Points& start);
+  Index num_guards() const { return static_cast<Index>(guards_.size()); }
+  /// The allowance: how far behind its guard's triangle a vertex may go (a tenth of dhat).
+  double guard_allowance() const { return kGuardShare * settings_.thickness; }
+  static constexpr double kGuardShare = 0.1;
+
   /// Sutures: copies held to others across an incision by springs (Simulator::add_spring), whose
   /// springs pull the two sides back into coincidence where the barrier would keep them apart:
   /// pairs within dhat of each other in the material with a corner in a sutured copy, and all
@@ -203,8 +233,18 @@ class SurfaceContact {
     double normal_force;
   };
   std::vector<FrictionPair> friction_;
+  // Guards of joined pairs for the current step: r = vertex - its foot on the triangle (the
+  // foot's barycentric coordinates held), g = normal . r.
+  struct Guard {
+    ContactTerm term;
+    Vec3 normal;
+  };
+  std::vector<Guard> guards_;
   bool sutures_changed_ = false;
   Points rest_y_;
+  // Per triangle its unit normal in the material; per vertex its triangles (CSR).
+  std::vector<Vec3> rest_normals_;
+  std::vector<Index> vertex_triangle_start_, vertex_triangles_;
   // The Verlet list: candidates within rho_ of each other at vertex positions reference_.
   std::vector<Candidate> candidates_;
   std::vector<collision::Proximity> proximities_;
@@ -237,6 +277,20 @@ void SurfaceContact::for_each_active(const Points& at, Visit&& visit) {
     const Vec3 n = p.r / p.distance;
     visit(t, kappa * barrier(p.distance, dhat), Vec3(kappa * barrier_first(p.distance, dhat) * n),
           Mat3(kappa * barrier_second(p.distance, dhat) * n * n.transpose()));
+  }
+  // The guards: the barrier on g + delta with thickness delta, zero while g >= 0.
+  const double delta = guard_allowance();
+  for (const Guard& guard : guards_) {
+    Vec3 r = Vec3::Zero();
+    for (int a = 0; a < guard.term.count; ++a) r += guard.term.coefficients[a] * at.row(guard.term.nodes[a]).transpose();
+    const double g = guard.normal.dot(r);
+    if (g >= 0) continue;
+    if (!(g + delta > 0)) {
+      visit(guard.term, std::numeric_limits<double>::infinity(), Vec3::Zero().eval(), Mat3::Zero().eval());
+      continue;
+    }
+    visit(guard.term, kappa * barrier(g + delta, delta), Vec3(kappa * barrier_first(g + delta, delta) * guard.normal),
+          Mat3(kappa * barrier_second(g + delta, delta) * guard.normal * guard.normal.transpose()));
   }
 }
 

@@ -357,6 +357,14 @@ TEST(Scene, SelfCollisionIsReadAndReported) {
   const std::string text((std::istreambuf_iterator<char>(file)), std::istreambuf_iterator<char>());
   EXPECT_NE(text.find("\"self_collision\""), std::string::npos);
   EXPECT_NE(text.find("\"max_contact_pairs\""), std::string::npos);
+
+  // Driven straight through the other half the moment it was cut: the fresh cut's guards stop
+  // it (without contact: CheckIntersectionsCountsPiecesPassingThroughEachOther).
+  std::string through = halves_driven(-1);
+  through.insert(through.find("\"time\""), R"("self_collision": true, )");
+  const SceneSummary held = run_scene(load_scene(write_scene(dir.path(), through)), dir.path() / "through", check);
+  EXPECT_EQ(held.pieces, 2);
+  EXPECT_EQ(held.max_intersecting_pairs, 0);
 }
 
 }  // namespace

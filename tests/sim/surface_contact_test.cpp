@@ -41,7 +41,8 @@ sim::Material soft() {
 Index crossings(const MaterialSurface& surface, const std::vector<std::array<Index, 4>>& copies, const sim::Simulator& sim) {
   const Points at = surface.positions(copies, sim.positions());
   const double diagonal = (at.colwise().maxCoeff() - at.colwise().minCoeff()).norm();
-  return count_surface_intersections(surface, copies, at, 1e-6 * diagonal).intersecting_pairs;
+  const double opened = std::max(1e-6 * diagonal, sim.surface_contact().fresh_cut_allowance);
+  return count_surface_intersections(surface, copies, at, opened).intersecting_pairs;
 }
 
 TEST(SurfaceContact, GradientMatchesFiniteDifferences) {
@@ -235,6 +236,67 @@ TEST(SurfaceContact, HalvesOfACutBlockPartAndMeetAgainWithoutCrossing) {
     ASSERT_EQ(crossings(surface, copies, sim), 0) << "meeting, step " << step;
   }
   EXPECT_GT(touching, 0);
+}
+
+// The halves of a block cut a moment ago are driven straight into each other: the sides of the
+// fresh cut, which coincide, are joined (no barrier between them), and guarded: neither half
+// passes into the other by more than the allowance.
+TEST(SurfaceContact, HalvesOfAFreshCutDrivenIntoEachOtherDoNotPassThrough) {
+  const TetMesh mesh = make_grid({Vec3(0, 0, 0), Vec3(1, 1, 1)}, {4, 4, 4}, 5);
+  Cutter cutter(mesh);
+  cutter.cut(plane_square(Vec3(0.43, 0.5, 0.5), Vec3(1, 0, 0), 3));
+  const CutResult result = cutter.result();
+  ASSERT_EQ(result.mesh.num_pieces(), 2);
+  const MaterialSurface& surface = result.surface;
+  const auto& copies = cutter.tet_nodes();
+  sim::Simulator sim(result.mesh.mesh, soft(), result.mesh.material_fractions());
+  sim.set_contact_surface(surface);
+  ASSERT_GT(sim.surface_contact().joined_copy_pairs, 0);
+  Points v = Points::Zero(sim.num_nodes(), 3);
+  const Index left_piece = [&] {
+    // The piece of a copy wholly left of the cut.
+    for (Index t = 0; t < result.mesh.mesh.num_tets(); ++t) {
+      double most = 0;
+      for (int k = 0; k < 4; ++k) most = std::max(most, result.mesh.mesh.rest()(result.mesh.mesh.tets()(t, k), 0));
+      if (most < 0.3) return result.mesh.tet_piece[t];
+    }
+    return Index{-1};
+  }();
+  ASSERT_GE(left_piece, 0);
+  for (Index t = 0; t < result.mesh.mesh.num_tets(); ++t) {
+    for (int k = 0; k < 4; ++k) v(result.mesh.mesh.tets()(t, k), 0) = result.mesh.tet_piece[t] == left_piece ? 1 : -1;
+  }
+  sim.set_velocities(v);
+  const Vec3 momentum = sim.momentum();
+  sim::StepOptions options;
+  options.dt = 0.01;
+  options.gravity = Vec3::Zero();
+  int guarded_steps = 0;
+  Index most_guards = 0;
+  for (int step = 0; step < 30; ++step) {
+    const sim::StepReport report = sim.step(options);
+    EXPECT_TRUE(report.converged) << "step " << step;
+    guarded_steps += report.contact_pairs > 0;
+    most_guards = std::max(most_guards, sim.surface_contact().guards);
+    ASSERT_EQ(crossings(surface, copies, sim), 0) << "step " << step;
+  }
+  EXPECT_GT(guarded_steps, 5);
+  EXPECT_GT(most_guards, 100);
+  EXPECT_EQ(sim.surface_contact().joined_copy_pairs, 0);  // apart: from now on they collide as any others
+  // They met and bounced apart: the momentum, -0.14 kg m/s in all, stays; the left half now
+  // moves away from the right one.
+  EXPECT_LT((sim.momentum() - momentum).norm(), 1e-3 * momentum.norm());
+  const Points at = surface.positions(copies, sim.positions());
+  double left_reach = -1e300, right_reach = 1e300;
+  for (Index n = 0; n < at.rows(); ++n) {
+    const bool left = result.mesh.tet_piece[surface.vertex_tet[n]] == left_piece;
+    if (left) {
+      left_reach = std::max(left_reach, at(n, 0));
+    } else {
+      right_reach = std::min(right_reach, at(n, 0));
+    }
+  }
+  EXPECT_GT(right_reach - left_reach, 0.05);
 }
 
 TEST(SurfaceContact, FrictionGradientAndHessianMatchFiniteDifferences) {
