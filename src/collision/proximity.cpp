@@ -43,6 +43,11 @@ Proximity on_edge(int i, int j, double t) {
   return p;
 }
 
+// num / den for an edge parameter, 0 where the edge has no length (den = 0: two corners at one
+// point, and num is then 0 too), so that a triangle with coincident corners gives its nearest
+// remaining corner or edge, not 0 / 0.
+double edge_parameter(double num, double den) { return den > 0 ? num / den : 0.0; }
+
 Proximity on_corner(int i) {
   Proximity p;
   p.w = {1, 0, 0, 0};
@@ -54,24 +59,9 @@ Proximity on_corner(int i) {
 
 Proximity point_triangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c) {
   const std::array<Vec3, 4> y{p, a, b, c};
-  const Vec3 ab = b - a, ac = c - a, ap = p - a;
-  const double d1 = ab.dot(ap), d2 = ac.dot(ap);
-  if (d1 <= 0 && d2 <= 0) return finish(on_corner(1), y);
-  const Vec3 bp = p - b;
-  const double d3 = ab.dot(bp), d4 = ac.dot(bp);
-  if (d3 >= 0 && d4 <= d3) return finish(on_corner(2), y);
-  const double vc = d1 * d4 - d3 * d2;
-  if (vc <= 0 && d1 >= 0 && d3 <= 0) return finish(on_edge(1, 2, d1 / (d1 - d3)), y);
-  const Vec3 cp = p - c;
-  const double d5 = ab.dot(cp), d6 = ac.dot(cp);
-  if (d6 >= 0 && d5 <= d6) return finish(on_corner(3), y);
-  const double vb = d5 * d2 - d1 * d6;
-  if (vb <= 0 && d2 >= 0 && d6 <= 0) return finish(on_edge(1, 3, d2 / (d2 - d6)), y);
-  const double va = d3 * d6 - d5 * d4;
-  if (va <= 0 && d4 - d3 >= 0 && d5 - d6 >= 0) return finish(on_edge(2, 3, (d4 - d3) / ((d4 - d3) + (d5 - d6))), y);
-  const double denominator = va + vb + vc;  // (2 area)^2 up to rounding
-  if (!(denominator > 0)) {
-    // Collinear corners: the nearest of the three edges.
+  // Collinear or coincident corners: the nearest of the three edges (the regions below assume a
+  // triangle with an area).
+  const auto nearest_edge = [&] {
     Proximity best;
     best.distance = std::numeric_limits<double>::infinity();
     const std::array<std::array<int, 2>, 3> edges{{{1, 2}, {1, 3}, {2, 3}}};
@@ -80,7 +70,25 @@ Proximity point_triangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3
       if (candidate.distance < best.distance) best = candidate;
     }
     return best;
-  }
+  };
+  const Vec3 ab = b - a, ac = c - a, ap = p - a;
+  if (!(ab.cross(ac).squaredNorm() > 0)) return nearest_edge();
+  const double d1 = ab.dot(ap), d2 = ac.dot(ap);
+  if (d1 <= 0 && d2 <= 0) return finish(on_corner(1), y);
+  const Vec3 bp = p - b;
+  const double d3 = ab.dot(bp), d4 = ac.dot(bp);
+  if (d3 >= 0 && d4 <= d3) return finish(on_corner(2), y);
+  const double vc = d1 * d4 - d3 * d2;
+  if (vc <= 0 && d1 >= 0 && d3 <= 0) return finish(on_edge(1, 2, edge_parameter(d1, d1 - d3)), y);
+  const Vec3 cp = p - c;
+  const double d5 = ab.dot(cp), d6 = ac.dot(cp);
+  if (d6 >= 0 && d5 <= d6) return finish(on_corner(3), y);
+  const double vb = d5 * d2 - d1 * d6;
+  if (vb <= 0 && d2 >= 0 && d6 <= 0) return finish(on_edge(1, 3, edge_parameter(d2, d2 - d6)), y);
+  const double va = d3 * d6 - d5 * d4;
+  if (va <= 0 && d4 - d3 >= 0 && d5 - d6 >= 0) return finish(on_edge(2, 3, edge_parameter(d4 - d3, (d4 - d3) + (d5 - d6))), y);
+  const double denominator = va + vb + vc;  // (2 area)^2 up to rounding
+  if (!(denominator > 0)) return nearest_edge();
   const double v = vb / denominator, w = vc / denominator;
   Proximity out;
   out.w = {1, -(1 - v - w), -v, -w};

@@ -80,6 +80,16 @@ TEST(Proximity, RegionsAreTheExpectedOnes) {
   EXPECT_NEAR(clamped.distance, std::sqrt(1 + 0.0625), 1e-15);
   // A degenerate triangle is its segment.
   EXPECT_NEAR(collision::point_triangle(Vec3(0.5, 1, 0), a, b, Vec3(2, 0, 0)).distance, 1.0, 1e-15);
+  // Coincident corners (a fan over a polygon's repeated point, as placed): still a segment, or a
+  // point, never 0 / 0. Every region of the point's position.
+  for (const Vec3& p : {Vec3(-1, 0.5, 0.3), Vec3(0.5, 0.5, 0.3), Vec3(2, -0.5, 0.1), Vec3(0, 0, 1)}) {
+    const Proximity two = collision::point_triangle(p, a, a, b);
+    const Proximity two_last = collision::point_triangle(p, a, b, b);
+    const double to_segment = (p - Vec3(std::clamp(p.x(), 0.0, 1.0), 0, 0)).norm();
+    EXPECT_NEAR(two.distance, to_segment, 1e-15);
+    EXPECT_NEAR(two_last.distance, to_segment, 1e-15);
+    EXPECT_NEAR(collision::point_triangle(p, b, b, b).distance, (p - b).norm(), 1e-15);
+  }
 }
 
 // Configurations in every region, away from region boundaries (where the Hessian jumps).
