@@ -675,8 +675,9 @@ void add_sim_command(CLI::App& app, Action& action) {
   };
   auto options = std::make_shared<Options>();
   CLI::App* command = app.add_subcommand(
-      "sim", "Simulate a scene (JSON): FEM on the mesh, timed cuts, obstacles, springs; writes one .vtu mesh and one "
-             ".vtp surface per output frame, ParaView .pvd series and summary.json");
+      "sim", "Simulate a scene (JSON): FEM on the mesh, timed cuts, obstacles, springs, or a cloth cut by polylines; "
+             "writes one mesh (.vtu; a cloth's triangle copies as .vtp) and one .vtp surface per output frame, ParaView "
+             ".pvd series and summary.json");
   command->add_option("SCENE", options->scene, "Scene file (.json); see include/tetcut/scene.hpp for the format")->required();
   command->add_option("-o,--out", options->out, "Output directory (created)")->required();
   command->add_option("--frames", options->frames, "Stop after this many output frames (a quick look)")
@@ -721,18 +722,22 @@ void add_sim_command(CLI::App& app, Action& action) {
       Eigen::AlignedBox3d frame_box;
       if (scene.picture_box) frame_box = Eigen::AlignedBox3d(scene.picture_box->min, scene.picture_box->max);
       if (options->png) {
-        run.frame_surface = [&](int frame, const TriangleSurface& surface) {
+        run.frame_surface = [&](int frame, const SceneFrame& shown) {
+          const TriangleSurface& surface = shown.surface;
           if (frame_box.isEmpty()) {
             for (Index v = 0; v < surface.num_vertices(); ++v) frame_box.extend(surface.vertices.row(v).transpose());
             const Vec3 grow = 0.25 * frame_box.sizes();
             frame_box = Eigen::AlignedBox3d(frame_box.min() - grow, frame_box.max() + grow);
           }
           render::RenderOptions render_options;
-          render_options.width = 640;
-          render_options.height = 480;
+          render_options.width = scene.picture_width;
+          render_options.height = scene.picture_height;
           render_options.frame = frame_box;
           render_options.camera.azimuth_degrees = scene.picture_azimuth;
           render_options.camera.elevation_degrees = scene.picture_elevation;
+          render_options.camera.zoom = scene.picture_zoom;
+          render_options.line_points = shown.line_points;  // a cloth's triangle copies
+          render_options.lines = shown.lines;
           render::write_png(options->out / fmt::format("frame_{:04d}.png", frame), render::render(surface, render_options));
         };
       }
@@ -747,7 +752,12 @@ void add_sim_command(CLI::App& app, Action& action) {
       fmt::print("simulated {} ({} s in {} steps)\n", options->scene.string(), summary.simulated_seconds, summary.steps);
       fmt::print("  frames           {} in {}\n", summary.frames, options->out.string());
       fmt::print("  cuts             {}\n", summary.cuts_applied);
-      fmt::print("  mesh             {} tets, {} nodes, {} pieces\n", summary.tets, summary.nodes, summary.pieces);
+      if (summary.cloth) {
+        fmt::print("  cloth            {} triangle copies of {} triangles, {} nodes, {} pieces\n", summary.triangle_copies,
+                   summary.triangles_in, summary.nodes, summary.pieces);
+      } else {
+        fmt::print("  mesh             {} tets, {} nodes, {} pieces\n", summary.tets, summary.nodes, summary.pieces);
+      }
       fmt::print("  time             {:.2f} s, {:.3f} s per frame, {:.2f} Newton iterations per step\n", summary.wall_seconds,
                  summary.seconds_per_frame, summary.mean_newton_iterations);
       const SceneStageSeconds& t = summary.stage_seconds;
