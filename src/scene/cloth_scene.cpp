@@ -116,13 +116,7 @@ ClothCut load_cloth_cut(const Value& cut, const std::filesystem::path& source, c
     if (const auto blade = cut.get("blade")) {
       blade->allow({"poses"});
       c.description = "blade";
-      std::vector<BladePose> poses;
-      for (const Value& pose : blade->at("poses").array()) {
-        const auto ab = pose.numbers(6);
-        poses.push_back({Vec3(ab[0], ab[1], ab[2]), Vec3(ab[3], ab[4], ab[5])});
-      }
-      if (poses.size() < 2) blade->at("poses").fail("needs at least 2 poses");
-      c.triangles = swept_blade(poses);
+      c.triangles = swept_blade(blade->at("poses").poses());
     } else if (const auto file = cut.get("triangles")) {
       c.description = file->string();
       c.triangles = read_surface(relative_to(source, c.description));
@@ -281,7 +275,8 @@ class ClothRunner {
  public:
   ClothRunner(const Scene& scene, const std::filesystem::path& directory, const SceneRunOptions& options)
       : scene_(scene), cloth_(*scene.cloth), directory_(directory), options_(options), cutter_(cloth_.mesh),
-        result_(cutter_.result()), sim_(result_.mesh, to_space(cloth_.mesh.rest, cloth_.plane), cloth_.material) {
+        result_(cutter_.result()), sim_(result_.mesh, to_space(cloth_.mesh.rest, cloth_.plane), cloth_.material),
+        frames_(scene, cloth_.step.dt, directory, options, ".vtp") {
     const Points rest = to_space(cloth_.mesh.rest, cloth_.plane);
     for (Index n = 0; n < rest.rows(); ++n) {
       for (const Box& box : scene_.pins) {
@@ -297,17 +292,14 @@ class ClothRunner {
     const auto start_time = Clock::now();
     std::filesystem::create_directories(directory_);
     const double dt = cloth_.step.dt;
-    const int steps = std::max(1, static_cast<int>(std::llround(scene_.duration / dt)));
-    const int every = scene_.output_every > 0 ? std::max(1, static_cast<int>(std::llround(scene_.output_every / dt))) : 1;
-    expected_frames_ = steps / every;
     write_frame(0);
     std::vector<double> step_ms;
     int newton_total = 0;
     SceneStageSeconds& t = summary_.stage_seconds;
-    for (int s = 0; s < steps; ++s) {
+    for (int s = 0; s < frames_.steps(); ++s) {
       const SceneStageSeconds before = t;
       apply_cuts((s + 0.5) * dt);  // what is due by the middle of the step
-      auto start = Clock::now();
+      const auto start = Clock::now();
       const sim::ClothStepReport report = sim_.step(cloth_.step);
       t.step += seconds_since(start);
       step_ms.push_back(1e3 * (t.cut - before.cut + t.surface - before.surface + t.remesh - before.remesh + t.step - before.step));
@@ -315,27 +307,19 @@ class ClothRunner {
       summary_.max_residual = std::max(summary_.max_residual, report.residual);
       summary_.unconverged_steps += report.converged ? 0 : 1;
       ++summary_.steps;
-      if ((s + 1) % every == 0) {
+      if (frames_.frame_after(s)) {
         write_frame((s + 1) * dt);
-        if (options_.max_frames >= 0 && static_cast<int>(times_.size()) - 1 >= options_.max_frames) break;
+        if (frames_.enough()) break;
       }
     }
     summary_.cloth = true;
-    summary_.frames = static_cast<int>(times_.size());
     summary_.triangles_in = cloth_.mesh.num_triangles();
     summary_.triangle_copies = result_.mesh.mesh.num_triangles();
     summary_.nodes = result_.mesh.mesh.num_nodes();
     summary_.pieces = result_.mesh.num_pieces();
     summary_.piece_areas = result_.mesh.piece_areas;
-    summary_.simulated_seconds = summary_.steps * dt;
-    summary_.wall_seconds = seconds_since(start_time);
-    summary_.seconds_per_frame = summary_.frames > 1 ? summary_.wall_seconds / (summary_.frames - 1) : summary_.wall_seconds;
     summary_.mean_newton_iterations = summary_.steps > 0 ? static_cast<double>(newton_total) / summary_.steps : 0;
-    summary_.step_ms_median = percentile(step_ms, 0.5);
-    summary_.step_ms_p99 = percentile(step_ms, 0.99);
-    summary_.step_ms_max = step_ms.empty() ? 0 : *std::max_element(step_ms.begin(), step_ms.end());
-    const Points& x = sim_.positions();
-    summary_.final_box = {x.colwise().minCoeff().transpose(), x.colwise().maxCoeff().transpose()};
+    frames_.finish(step_ms, sim_.positions(), start_time, &summary_);
     write_summary();
     return summary_;
   }
@@ -386,7 +370,7 @@ class ClothRunner {
 
   void write_frame(double time) {
     const auto start = Clock::now();
-    const int frame = static_cast<int>(times_.size());
+    const int frame = frames_.next();
     const Points& nodes = sim_.positions();
     char name[64];
     if (scene_.write_mesh) {
@@ -404,11 +388,7 @@ class ClothRunner {
         options_.frame_surface(frame, shown);
       }
     }
-    times_.push_back(time);
-    if (scene_.write_mesh) write_frame_series(directory_ / "mesh.pvd", "mesh", ".vtp", times_);
-    if (scene_.write_surface) write_frame_series(directory_ / "surface.pvd", "surface", ".vtp", times_);
-    summary_.stage_seconds.output += seconds_since(start);
-    if (options_.progress) options_.progress(frame, expected_frames_);
+    frames_.written(time, start, &summary_);
   }
 
   void write_summary() const {
@@ -445,8 +425,7 @@ class ClothRunner {
   PlanarCutResult result_;
   sim::ClothSimulator sim_;
   std::vector<CutProgress> progress_;
-  std::vector<double> times_;
-  int expected_frames_ = 0;
+  FrameSeries frames_;
   SceneSummary summary_;
 };
 

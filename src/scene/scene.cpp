@@ -32,7 +32,6 @@ using Json = nlohmann::json;
 using scene::percentile;
 using scene::relative_to;
 using scene::Value;
-using scene::write_frame_series;
 
 TetMesh load_mesh(const Value& mesh, const std::filesystem::path& source) {
   mesh.allow({"file", "grid", "bcc", "tet"});
@@ -93,13 +92,7 @@ SceneCut load_cut(const Value& cut, const std::filesystem::path& source) {
   } else if (const auto blade = cut.get("blade")) {
     blade->allow({"poses"});
     c.description = "blade";
-    std::vector<BladePose> poses;
-    for (const Value& pose : blade->at("poses").array()) {
-      const auto ab = pose.numbers(6);
-      poses.push_back({Vec3(ab[0], ab[1], ab[2]), Vec3(ab[3], ab[4], ab[5])});
-    }
-    if (poses.size() < 2) blade->at("poses").fail("needs at least 2 poses");
-    c.triangles = swept_blade(poses);
+    c.triangles = swept_blade(blade->at("poses").poses());
   } else {
     const Value cookie = cut.at("cookie_cutter");
     cookie.allow({"profile", "origin", "u", "v", "depth"});
@@ -126,9 +119,8 @@ SessionEvent load_event(const Value& e) {
   if (kinds != 1) e.fail("give exactly one of 'blade', 'lift_blade', 'grab', 'move_hook', 'release', 'pin' or 'unpin'");
   if (e.has("stiffness") && !e.has("grab")) e.at("stiffness").fail("goes with 'grab'");
   if (const auto blade = e.get("blade")) {
-    const auto ab = blade->numbers(6);
     event.kind = SessionEvent::Kind::kBlade;
-    event.pose = {Vec3(ab[0], ab[1], ab[2]), Vec3(ab[3], ab[4], ab[5])};
+    event.pose = blade->pose();
   } else if (const auto lift = e.get("lift_blade")) {
     if (!lift->boolean()) lift->fail("must be true");
     event.kind = SessionEvent::Kind::kLiftBlade;
@@ -224,6 +216,8 @@ void load_output(const Value& root, Scene* scene) {
   }
 }
 
+namespace {
+// The .pvd series of one kind of output, listing frames 0 .. times.size() - 1.
 void write_frame_series(const std::filesystem::path& path, const std::string& prefix, const std::string& extension,
                         const std::vector<double>& times) {
   std::vector<SeriesEntry> entries;
@@ -233,6 +227,37 @@ void write_frame_series(const std::filesystem::path& path, const std::string& pr
     entries.push_back({times[f], name});
   }
   write_series(path, entries);
+}
+}  // namespace
+
+FrameSeries::FrameSeries(const Scene& scene, double dt, std::filesystem::path directory, const SceneRunOptions& options,
+                         std::string mesh_extension)
+    : scene_(scene), dt_(dt), directory_(std::move(directory)), options_(options), mesh_extension_(std::move(mesh_extension)) {
+  steps_ = std::max(1, static_cast<int>(std::llround(scene.duration / dt)));
+  every_ = scene.output_every > 0 ? std::max(1, static_cast<int>(std::llround(scene.output_every / dt))) : 1;
+  expected_ = steps_ / every_;
+}
+
+void FrameSeries::written(double time, Clock::time_point start, SceneSummary* summary) {
+  const int frame = next();
+  times_.push_back(time);
+  if (scene_.write_mesh) write_frame_series(directory_ / "mesh.pvd", "mesh", mesh_extension_, times_);
+  if (scene_.write_surface) write_frame_series(directory_ / "surface.pvd", "surface", ".vtp", times_);
+  summary->stage_seconds.output += seconds_since(start);
+  if (options_.progress) options_.progress(frame, expected_);
+}
+
+void FrameSeries::finish(const std::vector<double>& step_ms, const Points& nodes, Clock::time_point start,
+                         SceneSummary* summary) const {
+  SceneSummary& s = *summary;
+  s.frames = next();
+  s.simulated_seconds = s.steps * dt_;
+  s.wall_seconds = seconds_since(start);
+  s.seconds_per_frame = s.frames > 1 ? s.wall_seconds / (s.frames - 1) : s.wall_seconds;
+  s.step_ms_median = percentile(step_ms, 0.5);
+  s.step_ms_p99 = percentile(step_ms, 0.99);
+  s.step_ms_max = step_ms.empty() ? 0 : *std::max_element(step_ms.begin(), step_ms.end());
+  s.final_box = {nodes.colwise().minCoeff().transpose(), nodes.colwise().maxCoeff().transpose()};
 }
 
 double percentile(std::vector<double> v, double p) {
@@ -402,11 +427,7 @@ Scene parse_scene(std::string_view text, const std::filesystem::path& path) {
       scalpel.until = blade.at("until").non_negative();
       if (!(scalpel.until > scalpel.from)) blade.at("until").fail("must come after 'from'");
       if (const auto space = blade.get("space")) scalpel.world_space = space->choice({"rest", "world"}) == "world";
-      for (const Value& pose : blade.at("poses").array()) {
-        const auto ab = pose.numbers(6);
-        scalpel.poses.push_back({Vec3(ab[0], ab[1], ab[2]), Vec3(ab[3], ab[4], ab[5])});
-      }
-      if (scalpel.poses.size() < 2) blade.at("poses").fail("needs at least 2 poses");
+      scalpel.poses = blade.at("poses").poses();
       scene.scalpels.push_back(std::move(scalpel));
     }
   }
@@ -465,7 +486,7 @@ namespace {
 class SceneRunner {
  public:
   SceneRunner(const Scene& scene, const std::filesystem::path& directory, const SceneRunOptions& options)
-      : scene_(scene), directory_(directory), options_(options), session_(scene) {
+      : scene_(scene), directory_(directory), options_(options), session_(scene), frames_(scene, scene.step.dt, directory, options, ".vtu") {
     mesh_fields_.current_positions = true;
   }
 
@@ -473,14 +494,11 @@ class SceneRunner {
     const auto start_time = Clock::now();
     std::filesystem::create_directories(directory_);
     const double dt = scene_.step.dt;
-    const int steps = std::max(1, static_cast<int>(std::llround(scene_.duration / dt)));
-    const int every = scene_.output_every > 0 ? std::max(1, static_cast<int>(std::llround(scene_.output_every / dt))) : 1;
-    expected_frames_ = steps / every;
     write_frame(0);
     std::vector<double> step_ms;
     double newton_total = 0, cg_total = 0;
     SceneStageSeconds& t = summary_.stage_seconds;
-    for (int s = 0; s < steps; ++s) {
+    for (int s = 0; s < frames_.steps(); ++s) {
       const SessionStep step = session_.advance();
       t.cut += step.seconds.cut;
       t.surface += step.seconds.surface;
@@ -495,13 +513,12 @@ class SceneRunner {
       summary_.contact_limited_steps += step.report.contact_limited_steps;
       summary_.contact_seconds += step.report.contact_seconds;
       ++summary_.steps;
-      if ((s + 1) % every == 0) {
+      if (frames_.frame_after(s)) {
         write_frame((s + 1) * dt);
-        if (options_.max_frames >= 0 && static_cast<int>(times_.size()) - 1 >= options_.max_frames) break;
+        if (frames_.enough()) break;
       }
     }
     const CutResult& r = session_.result();
-    summary_.frames = static_cast<int>(times_.size());
     summary_.cuts_applied = session_.cuts_applied();
     summary_.springs = session_.num_incision_springs();
     summary_.spring_gap_when_attached = session_.incision_gap_when_attached();
@@ -509,16 +526,9 @@ class SceneRunner {
     summary_.tets = r.mesh.mesh.num_tets();
     summary_.nodes = r.mesh.mesh.num_nodes();
     summary_.pieces = r.mesh.num_pieces();
-    summary_.simulated_seconds = summary_.steps * dt;
-    summary_.wall_seconds = seconds_since(start_time);
-    summary_.seconds_per_frame = summary_.frames > 1 ? summary_.wall_seconds / (summary_.frames - 1) : summary_.wall_seconds;
     summary_.mean_newton_iterations = summary_.steps > 0 ? newton_total / summary_.steps : 0;
     summary_.mean_cg_iterations = summary_.steps > 0 ? cg_total / summary_.steps : 0;
-    summary_.step_ms_median = percentile(step_ms, 0.5);
-    summary_.step_ms_p99 = percentile(step_ms, 0.99);
-    summary_.step_ms_max = step_ms.empty() ? 0 : *std::max_element(step_ms.begin(), step_ms.end());
-    const Points& x = session_.simulator().positions();
-    summary_.final_box = {x.colwise().minCoeff().transpose(), x.colwise().maxCoeff().transpose()};
+    frames_.finish(step_ms, session_.simulator().positions(), start_time, &summary_);
     write_summary();
     return summary_;
   }
@@ -526,7 +536,7 @@ class SceneRunner {
  private:
   void write_frame(double time) {
     const auto start = Clock::now();
-    const int frame = static_cast<int>(times_.size());
+    const int frame = frames_.next();
     char name[64];
     if (scene_.write_mesh) {
       CutResult& r = session_.result();
@@ -564,11 +574,7 @@ class SceneRunner {
         options_.frame_surface(frame, shown);
       }
     }
-    times_.push_back(time);
-    if (scene_.write_mesh) write_frame_series(directory_ / "mesh.pvd", "mesh", ".vtu", times_);
-    if (scene_.write_surface) write_frame_series(directory_ / "surface.pvd", "surface", ".vtp", times_);
-    summary_.stage_seconds.output += seconds_since(start);
-    if (options_.progress) options_.progress(frame, expected_frames_);
+    frames_.written(time, start, &summary_);
   }
 
   void write_summary() const {
@@ -614,8 +620,7 @@ class SceneRunner {
   Session session_;
   TetMeshWriteOptions mesh_fields_;
   int fields_for_cut_ = -1;
-  std::vector<double> times_;
-  int expected_frames_ = 0;
+  scene::FrameSeries frames_;
   SceneSummary summary_;
 };
 

@@ -3,10 +3,13 @@
 // knows its key path, so that every error names it ("cuts[2].cylinder.radius: must be positive"),
 // the keys both read, and pieces of their runs' output.
 
+#include <tetcut/blade.hpp>
 #include <tetcut/error.hpp>
 #include <tetcut/generators.hpp>
 #include <tetcut/scene.hpp>
 #include <tetcut/types.hpp>
+
+#include "util/stopwatch.hpp"
 
 #include <nlohmann/json.hpp>
 
@@ -114,6 +117,18 @@ class Value {
     if (!(v.norm() > 0)) fail("must not be the zero vector");
     return v;
   }
+  // A blade's pose, [ax, ay, az, bx, by, bz].
+  BladePose pose() const {
+    const auto ab = numbers(6);
+    return {Vec3(ab[0], ab[1], ab[2]), Vec3(ab[3], ab[4], ab[5])};
+  }
+  // A blade moving through poses: at least two.
+  std::vector<BladePose> poses() const {
+    std::vector<BladePose> out;
+    for (const Value& pose : array()) out.push_back(pose.pose());
+    if (out.size() < 2) fail("needs at least 2 poses");
+    return out;
+  }
   Box box() const {
     const auto v = numbers(6);
     Box b{Vec3(v[0], v[1], v[2]), Vec3(v[3], v[4], v[5])};
@@ -140,9 +155,37 @@ void load_output(const Value& root, Scene* scene);
 // Everything of a cloth scene (root has "cloth"): cloth_scene.cpp.
 void load_cloth(const Value& root, const std::filesystem::path& path, Scene* scene);
 
-// The .pvd series of one kind of output, listing frames 0 .. times.size() - 1.
-void write_frame_series(const std::filesystem::path& path, const std::string& prefix, const std::string& extension,
-                        const std::vector<double>& times);
+// The frames a run writes, for the tet and the cloth runners: how many steps the scene's time asks
+// for and after which a frame is written; after each frame the .pvd series listing the frames so
+// far (mesh_NNNN with the runner's mesh extension, and surface_NNNN.vtp), its time in the output
+// stage and the caller's progress; at the end the run's totals.
+class FrameSeries {
+ public:
+  FrameSeries(const Scene& scene, double dt, std::filesystem::path directory, const SceneRunOptions& options,
+              std::string mesh_extension);
+  int steps() const { return steps_; }
+  /// Whether a frame is written after step `step` (from 0).
+  bool frame_after(int step) const { return (step + 1) % every_ == 0; }
+  /// The number of the frame being written.
+  int next() const { return static_cast<int>(times_.size()); }
+  /// Frame next() is written, for simulated time `time`; writing it began at `start`.
+  void written(double time, Clock::time_point start, SceneSummary* summary);
+  /// Whether the frames asked for (SceneRunOptions::max_frames) are written.
+  bool enough() const { return options_.max_frames >= 0 && next() - 1 >= options_.max_frames; }
+  /// frames, simulated and wall seconds, seconds per frame, the median, p99 and largest of
+  /// `step_ms` (per step), and the box of `nodes` at the end.
+  void finish(const std::vector<double>& step_ms, const Points& nodes, Clock::time_point start, SceneSummary* summary) const;
+
+ private:
+  const Scene& scene_;
+  double dt_;
+  std::filesystem::path directory_;
+  const SceneRunOptions& options_;
+  std::string mesh_extension_;
+  int steps_ = 1, every_ = 1, expected_ = 0;
+  std::vector<double> times_;
+};
+
 double percentile(std::vector<double> v, double p);
 // summary.json's "ms_per_step": the stages per step, and the median, p99 and largest step.
 Json ms_per_step_json(const SceneSummary& summary);
