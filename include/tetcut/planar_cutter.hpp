@@ -159,8 +159,8 @@ class PlanarCutter {
   /// same registered point. A copy lying in a triangle's plane where the triangle reaches it is
   /// not cut by it and is reported (skipped_coplanar); zero-area triangles are skipped and
   /// reported. Throws Error(kInvalidInput), changing nothing, for a non-finite or missing corner,
-  /// a wrong number of node positions or a non-finite one. Cost: O(copies log copies) for their
-  /// current boxes, then as cut() per copy a triangle reaches.
+  /// a wrong number of node positions or a non-finite one. Cost: O(copies) to find those near the
+  /// batch (a pass over their current boxes), then as cut() per copy a triangle reaches.
   PlanarCutReport cut_deformed(const TriangleSurface& batch, const Points& nodes);
 
   /// Maps points on the mesh in its deformed positions (|P| x 3, e.g. a blade drawn on the cloth)

@@ -478,12 +478,19 @@ PlanarCutReport PlanarCutter::cut_deformed(const TriangleSurface& batch, const P
   report.first_new_triangle = num_triangles();
   report.segments = batch.num_triangles();
 
-  // The copies in their current shapes, O(copies log copies); box comparisons are exact, so no
-  // copy a triangle reaches is missed.
-  const Index copies = num_triangles();
-  std::vector<spatial::Aabb> boxes(static_cast<std::size_t>(copies));
-  for (Index c = 0; c < copies; ++c) {
-    for (const Index n : s.copy_nodes[c]) boxes[c].extend(nodes.row(n).transpose());
+  // The copies near the batch in their current shapes: a pass over all copies' current boxes
+  // against the batch's box (O(copies)), then a tree over those near it (O(k log k)). Box
+  // comparisons are exact, so no copy a triangle reaches is missed.
+  spatial::Aabb reach;
+  for (Index v = 0; v < batch.num_vertices(); ++v) reach.extend(batch.vertices.row(v).transpose());
+  std::vector<Index> near;
+  std::vector<spatial::Aabb> boxes;
+  for (Index c = 0; c < num_triangles(); ++c) {
+    spatial::Aabb box;
+    for (const Index n : s.copy_nodes[c]) box.extend(nodes.row(n).transpose());
+    if (!box.meets(reach)) continue;
+    near.push_back(c);
+    boxes.push_back(box);
   }
   const spatial::BoxTree current(std::move(boxes));
   s.planes.forget_pulled_back();  // pulled back through other positions
@@ -508,7 +515,8 @@ PlanarCutReport PlanarCutter::cut_deformed(const TriangleSurface& batch, const P
     for (const Vec3& x : corners) box.extend(x);
     candidates.clear();
     current.query(box, &candidates);
-    for (const Index copy : candidates) {
+    for (const Index candidate : candidates) {
+      const Index copy = near[candidate];
       const std::array<Vec3, 3> now = {nodes.row(s.copy_nodes[copy][0]).transpose(), nodes.row(s.copy_nodes[copy][1]).transpose(),
                                        nodes.row(s.copy_nodes[copy][2]).transpose()};
       // The pull-backs are affine on the copy, so their signs at its corners bound them: a plane
