@@ -56,30 +56,35 @@
 // A cloth scene (the 2D version: a planar triangle mesh cut by polylines, simulated in 3D by
 // tetcut::sim::ClothSimulator) has "cloth" instead of "mesh" and "material":
 //
-//   { "cloth":    {"mesh": {"file": PATH}                      a triangle surface in a coordinate plane
+//   { "cloth":    {"mesh": {"file": PATH}  (required: a triangle surface in a coordinate plane)
 //                          | {"grid": {"cells": N, "size": S, "origin": [x,y,z], "plane": "xy"|"xz"|"yz"}},
 //                  "material": {"density" (kg/m^2), "stretch_stiffness" (N/m), "poisson_ratio",
-//                               "bending_stiffness" (N m), "mass_damping" (1/s)}}   (required)
+//                               "bending_stiffness" (N m), "mass_damping" (1/s)}}
 //     "gravity", "time", "pin", "output":  as above ("time.dt" defaults to 1/60 s)
 //     "solver":   {"tolerance", "max_newton_iterations"}   (ClothStepOptions)
-//     "cuts":     [{"time", "space": "rest"|"world" (default "world", as above), and one of
+//     "cuts":     [{"time", "until" (rest space only), "space": "rest"|"world" (default "world",
+//                   as above), and one of
 //                    "polyline": [[x,y,z], ...] (with "closed": true|false) | "polylines": PATH
 //                    (OBJ l, VTK or VTP lines, or a point list, as tetcut cut2d reads)
 //                    | "spiral": {"centre": [x,y,z], "outer_radius", "spacing", "inner_radius"
 //                                 (default: spacing), "step" (default: spacing / 8), "from": [x,y,z]}
-//                    | "blade": {"poses": [[ax,ay,az, bx,by,bz], ...]} | "triangles": PATH}]
+//                    | "blade": {"poses": [[ax,ay,az, bx,by,bz], ...]} | "triangles": PATH;
+//                   and with a polyline in world space "through": [dx,dy,dz]}]
 //   }
 //
 // The mesh starts where its rest positions put it in space (a file's own coordinates; a grid's
 // (u, v) added to the origin's coordinates on the plane's two axes). Rest-space cuts are polylines
 // in the rest plane (given in space: the plane's normal coordinate is dropped), or a spiral in it
-// (Figure 1's cut, from the point "from" when given); with "until": T they are cut progressively,
-// their points reached evenly along their length from "time" to T, each step the stretch reached
-// since the last. World-space cuts are placed on the cloth as it is at that time
-// (PlanarCutter::cut_deformed, exact): the strip a blade sweeps through its poses, triangles from
-// a file, or a polyline pushed through the cloth along "through": [dx,dy,dz] (the strip between
-// the polyline moved by -through and by +through). Keys of the tet scenes that cloth has not
-// ("mesh", "material", "obstacles", "scalpels", "events", ...) are errors in a cloth scene.
+// (tetcut::spiral, Figure 1's cut, led in from the point "from" when given). With "until": T they
+// are cut progressively: each step, the stretch from where the cut had got to as far along the
+// polylines' length as the time since "time" goes towards T (ending between two of their points
+// where it falls there; the next stretch starts at that very point). World-space cuts are placed
+// on the cloth as it is at that time (PlanarCutter::cut_deformed, exact): the strip a blade sweeps
+// through its poses, triangles from a file, or a polyline pushed through the cloth along
+// "through" (the strip between the polyline moved by -through and by +through). A world-space cut
+// happens at one time: stretches placed on the moving cloth at different times would not meet in
+// the material. Keys of the tet scenes that a cloth has not ("mesh", "material", "obstacles",
+// "scalpels", "events", ...) are errors in a cloth scene.
 
 #include <tetcut/blade.hpp>
 #include <tetcut/cloth.hpp>
