@@ -11,6 +11,7 @@
 // is installed), and cloth_spiral.obj (the material at the end).
 
 #include <tetcut/cloth.hpp>
+#include <tetcut/cutting_surfaces.hpp>
 #include <tetcut/error.hpp>
 #include <tetcut/generators.hpp>
 #include <tetcut/io.hpp>
@@ -19,11 +20,9 @@
 
 #include <algorithm>
 #include <chrono>
-#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
-#include <numbers>
 
 namespace {
 
@@ -33,18 +32,11 @@ using tetcut::Index;
 // about the square's centre (a the angle turned, clockwise from straight down) in to radius
 // `spacing`, as points about `step` apart. With r0 below half the side the spiral stays inside
 // the square, so the material is one ribbon.
-tetcut::Points2 spiral(double spacing, double step) {
-  std::vector<Eigen::Vector2d> points = {Eigen::Vector2d(0.5, -0.05)};
-  const double r0 = 0.48;
-  for (double turned = 0;;) {
-    const double r = r0 - spacing * turned / (2 * std::numbers::pi);
-    if (r < spacing) break;
-    const double angle = -std::numbers::pi / 2 - turned;
-    points.emplace_back(0.5 + r * std::cos(angle), 0.5 + r * std::sin(angle));
-    turned += step / r;  // about `step` of arc
-  }
-  tetcut::Points2 out(static_cast<Index>(points.size()), 2);
-  for (std::size_t i = 0; i < points.size(); ++i) out.row(static_cast<Index>(i)) = points[i].transpose();
+tetcut::Points2 spiral_cut(double spacing, double step) {
+  const tetcut::Points2 turns = tetcut::spiral(Eigen::Vector2d(0.5, 0.5), 0.48, spacing, spacing, step);
+  tetcut::Points2 out(turns.rows() + 1, 2);
+  out.row(0) << 0.5, -0.05;
+  out.bottomRows(turns.rows()) = turns;
   return out;
 }
 
@@ -53,22 +45,6 @@ tetcut::TriangleSurface material_surface(const tetcut::PlanarCutResult& cut, con
   surface.vertices = cut.material.positions(cut.mesh, nodes);
   surface.triangles = cut.material.triangles;
   return surface;
-}
-
-// The edges of the triangle copies, each once.
-tetcut::Edges copy_edges(const tetcut::PlanarCutMesh& mesh) {
-  std::vector<std::array<Index, 2>> edges;
-  for (Index c = 0; c < mesh.mesh.num_triangles(); ++c) {
-    for (int k = 0; k < 3; ++k) {
-      const Index a = mesh.mesh.triangles(c, k), b = mesh.mesh.triangles(c, (k + 1) % 3);
-      edges.push_back({std::min(a, b), std::max(a, b)});
-    }
-  }
-  std::sort(edges.begin(), edges.end());
-  edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
-  tetcut::Edges out(static_cast<Index>(edges.size()), 2);
-  for (std::size_t i = 0; i < edges.size(); ++i) out.row(static_cast<Index>(i)) << edges[i][0], edges[i][1];
-  return out;
 }
 
 }  // namespace
@@ -100,7 +76,7 @@ int main(int argc, char** argv) {
   for (int i = 0; i <= n; ++i) cloth.pin(n * (n + 1) + i);
 
   // The spiral, cut a stretch per frame over the first two thirds of the run, then let hang.
-  const tetcut::Points2 path = spiral(spacing, 0.01);
+  const tetcut::Points2 path = spiral_cut(spacing, 0.01);
   const Index segments = static_cast<Index>(path.rows()) - 1;
   const int cutting_frames = std::max(1, 2 * frames / 3);
   const Index per_frame = (segments + cutting_frames - 1) / cutting_frames;
@@ -136,7 +112,7 @@ int main(int argc, char** argv) {
       std::snprintf(name, sizeof name, "frame_%04d.png", frame / 4);
       // The material, and over it the edges of the triangle copies it is embedded in.
       picture.line_points = cloth.positions();
-      picture.lines = copy_edges(cut.mesh);
+      picture.lines = tetcut::triangle_edges(cut.mesh.mesh.triangles);
       tetcut::render::write_png(out / "cloth_spiral_frames" / name,
                                 tetcut::render::render(material_surface(cut, cloth.positions()), picture));
     }
@@ -150,7 +126,7 @@ int main(int argc, char** argv) {
   const tetcut::TriangleSurface last = material_surface(cut, cloth.positions());
   tetcut::write_surface(out / "cloth_spiral.obj", last);
   picture.line_points = cloth.positions();
-  picture.lines = copy_edges(cut.mesh);
+  picture.lines = tetcut::triangle_edges(cut.mesh.mesh.triangles);
   tetcut::render::write_png(out / "cloth_spiral.png", tetcut::render::render(last, picture));
   try {
     tetcut::render::write_animation(out / "cloth_spiral_frames" / "frame_%04d.png", 15, out / "cloth_spiral.gif");

@@ -675,8 +675,9 @@ void add_sim_command(CLI::App& app, Action& action) {
   };
   auto options = std::make_shared<Options>();
   CLI::App* command = app.add_subcommand(
-      "sim", "Simulate a scene (JSON): FEM on the mesh, timed cuts, obstacles, springs; writes one .vtu mesh and one "
-             ".vtp surface per output frame, ParaView .pvd series and summary.json");
+      "sim", "Simulate a scene (JSON): FEM on the mesh, timed cuts, obstacles, springs, or a cloth cut by polylines; "
+             "writes one mesh (.vtu; a cloth's triangle copies as .vtp) and one .vtp surface per output frame, ParaView "
+             ".pvd series and summary.json");
   command->add_option("SCENE", options->scene, "Scene file (.json); see include/tetcut/scene.hpp for the format")->required();
   command->add_option("-o,--out", options->out, "Output directory (created)")->required();
   command->add_option("--frames", options->frames, "Stop after this many output frames (a quick look)")
@@ -721,18 +722,22 @@ void add_sim_command(CLI::App& app, Action& action) {
       Eigen::AlignedBox3d frame_box;
       if (scene.picture_box) frame_box = Eigen::AlignedBox3d(scene.picture_box->min, scene.picture_box->max);
       if (options->png) {
-        run.frame_surface = [&](int frame, const TriangleSurface& surface) {
+        run.frame_surface = [&](int frame, const SceneFrame& shown) {
+          const TriangleSurface& surface = shown.surface;
           if (frame_box.isEmpty()) {
             for (Index v = 0; v < surface.num_vertices(); ++v) frame_box.extend(surface.vertices.row(v).transpose());
             const Vec3 grow = 0.25 * frame_box.sizes();
             frame_box = Eigen::AlignedBox3d(frame_box.min() - grow, frame_box.max() + grow);
           }
           render::RenderOptions render_options;
-          render_options.width = 640;
-          render_options.height = 480;
+          render_options.width = scene.picture_width;
+          render_options.height = scene.picture_height;
           render_options.frame = frame_box;
           render_options.camera.azimuth_degrees = scene.picture_azimuth;
           render_options.camera.elevation_degrees = scene.picture_elevation;
+          render_options.camera.zoom = scene.picture_zoom;
+          render_options.line_points = shown.line_points;  // a cloth's triangle copies
+          render_options.lines = shown.lines;
           render::write_png(options->out / fmt::format("frame_{:04d}.png", frame), render::render(surface, render_options));
         };
       }
@@ -747,7 +752,12 @@ void add_sim_command(CLI::App& app, Action& action) {
       fmt::print("simulated {} ({} s in {} steps)\n", options->scene.string(), summary.simulated_seconds, summary.steps);
       fmt::print("  frames           {} in {}\n", summary.frames, options->out.string());
       fmt::print("  cuts             {}\n", summary.cuts_applied);
-      fmt::print("  mesh             {} tets, {} nodes, {} pieces\n", summary.tets, summary.nodes, summary.pieces);
+      if (summary.cloth) {
+        fmt::print("  cloth            {} triangle copies of {} triangles, {} nodes, {} pieces\n", summary.triangle_copies,
+                   summary.triangles_in, summary.nodes, summary.pieces);
+      } else {
+        fmt::print("  mesh             {} tets, {} nodes, {} pieces\n", summary.tets, summary.nodes, summary.pieces);
+      }
       fmt::print("  time             {:.2f} s, {:.3f} s per frame, {:.2f} Newton iterations per step\n", summary.wall_seconds,
                  summary.seconds_per_frame, summary.mean_newton_iterations);
       const SceneStageSeconds& t = summary.stage_seconds;
@@ -767,6 +777,66 @@ void add_sim_command(CLI::App& app, Action& action) {
   });
 }
 
+namespace {
+
+// What `tetcut render` draws from IN: a surface, a tet mesh's boundary (with its edges), or a
+// frame of a directory `tetcut sim` wrote (its surface, with its mesh's edges: a tet mesh's, or a
+// cloth's triangle copies).
+struct RenderInput {
+  TriangleSurface surface;
+  Points edge_points;  // the edges IN itself offers to --wireframe, if any
+  Edges edges;
+  std::string name;
+};
+
+// The edges of a mesh file: a tet mesh's, or a triangle surface's (a cloth's triangle copies).
+void read_edges(const fs::path& path, Points* points, Edges* edges) {
+  if (file_kind(path) == FileKind::kTetMesh) {
+    const TetMesh mesh = read_tet_mesh(path);
+    *points = mesh.rest();
+    *edges = render::mesh_edges(mesh);
+  } else {
+    const TriangleSurface surface = read_surface(path);
+    *points = surface.vertices;
+    *edges = triangle_edges(surface.triangles);
+  }
+}
+
+RenderInput render_input(const fs::path& in, int frame) {
+  RenderInput r;
+  r.name = in.string();
+  if (fs::is_directory(in)) {
+    if (!fs::exists(in / "surface.pvd")) {
+      throw Error(ErrorKind::kInvalidInput, "no surface.pvd here: a directory to render is one that 'tetcut sim' wrote", in.string());
+    }
+    const std::vector<SeriesEntry> surfaces = read_series(in / "surface.pvd");
+    const int last = static_cast<int>(surfaces.size()) - 1;
+    if (frame > last) {
+      throw Error(ErrorKind::kInvalidArgument, fmt::format("--frame {}: the series has frames 0 to {}", frame, last), in.string());
+    }
+    const std::size_t f = static_cast<std::size_t>(frame < 0 ? last : frame);
+    r.surface = read_surface(surfaces[f].file);
+    r.name = surfaces[f].file.string();
+    if (fs::exists(in / "mesh.pvd")) {
+      const std::vector<SeriesEntry> meshes = read_series(in / "mesh.pvd");
+      if (meshes.size() != surfaces.size()) {
+        throw Error(ErrorKind::kInvalidInput, "mesh.pvd and surface.pvd list different numbers of frames", in.string());
+      }
+      read_edges(meshes[f].file, &r.edge_points, &r.edges);  // a frame's mesh holds its current positions
+    }
+  } else if (file_kind(in) == FileKind::kTetMesh) {
+    const TetMesh mesh = read_tet_mesh(in);
+    r.surface = boundary_surface(mesh);
+    r.edge_points = mesh.rest();
+    r.edges = render::mesh_edges(mesh);
+  } else {
+    r.surface = read_surface(in);
+  }
+  return r;
+}
+
+}  // namespace
+
 void add_render_command(CLI::App& app, Action& action) {
   struct Options {
     fs::path input;
@@ -776,12 +846,15 @@ void add_render_command(CLI::App& app, Action& action) {
     bool pieces = false;
     std::vector<std::string> wireframe;
     bool wireframe_given = false;
+    int frame = -1;
   };
   auto options = std::make_shared<Options>();
   CLI::App* command = app.add_subcommand(
-      "render", "Render a surface or a tet mesh (its boundary) to a PNG, offscreen (OpenGL ES through EGL; Mesa's "
-                "software renderer needs no GPU)");
-  command->add_option("IN", options->input, "Surface or tet mesh file")->required();
+      "render", "Render a surface, a tet mesh (its boundary) or a frame of a 'tetcut sim' directory to a PNG, offscreen "
+                "(OpenGL ES through EGL; Mesa's software renderer needs no GPU)");
+  command->add_option("IN", options->input,
+                      "Surface or tet mesh file, or a directory 'tetcut sim' wrote (a tet or a cloth scene)")
+      ->required();
   command->add_option("-o,--out", options->out, "PNG to write")->required();
   command->add_option("--size", options->size, "Width and height in pixels")->expected(2)->check(CLI::Range(1, 16384));
   command->add_option("--azimuth", options->camera.azimuth_degrees, "Camera angle around the z axis, degrees (default 35)");
@@ -789,39 +862,42 @@ void add_render_command(CLI::App& app, Action& action) {
   command->add_option("--zoom", options->camera.zoom, "1 fits the scene; 2 is twice as close")->check(CLI::PositiveNumber);
   command->add_flag("--pieces", options->pieces, "Colour each piece (connected part) in its own colour");
   command->add_option("--wireframe", options->wireframe,
-                      "Draw the edges of a tet mesh over the surface: of IN when it is a mesh, or of the mesh file given")
+                      "Draw the edges of a mesh over the surface: of IN when it is a tet mesh or a 'tetcut sim' directory "
+                      "(its tets, or a cloth's triangle copies), or of the file given (a tet mesh, or a surface such as "
+                      "'tetcut cut2d --copies' writes)")
       ->expected(0, 1);
+  command->add_option("--frame", options->frame, "With a 'tetcut sim' directory: the frame to draw (default: the last)")
+      ->check(CLI::NonNegativeNumber);
   command->callback([options, command, &action] {
     options->wireframe_given = command->count("--wireframe") > 0;
     action = [options] {
       if (options->out.extension() != ".png") throw Error(ErrorKind::kInvalidArgument, "the output must be a .png file", options->out.string());
       check_not_input(options->out, options->input);
+      if (options->frame >= 0 && !fs::is_directory(options->input)) {
+        throw Error(ErrorKind::kInvalidArgument, "--frame goes with a directory 'tetcut sim' wrote", options->input.string());
+      }
       render::RenderOptions render_options;
       render_options.width = options->size[0];
       render_options.height = options->size[1];
       render_options.camera = options->camera;
       render_options.colour_pieces = options->pieces;
-      TriangleSurface surface;
-      std::optional<TetMesh> mesh;
-      if (file_kind(options->input) == FileKind::kTetMesh) {
-        mesh = read_tet_mesh(options->input);
-        surface = boundary_surface(*mesh);
-      } else {
-        surface = read_surface(options->input);
-      }
+      RenderInput in = render_input(options->input, options->frame);
       if (options->wireframe_given) {
         if (!options->wireframe.empty() && !options->wireframe.front().empty()) {
-          mesh = read_tet_mesh(options->wireframe.front());
-        } else if (!mesh) {
-          throw Error(ErrorKind::kInvalidArgument, "--wireframe without a file needs IN to be a tet mesh", options->input.string());
+          read_edges(options->wireframe.front(), &render_options.line_points, &render_options.lines);
+        } else if (in.edges.rows() > 0) {
+          render_options.line_points = std::move(in.edge_points);
+          render_options.lines = std::move(in.edges);
+        } else {
+          throw Error(ErrorKind::kInvalidArgument,
+                      "--wireframe without a file needs IN to be a tet mesh or a 'tetcut sim' directory with meshes",
+                      options->input.string());
         }
-        render_options.line_points = mesh->rest();
-        render_options.lines = render::mesh_edges(*mesh);
       }
       const auto start = Clock::now();
-      const render::Image image = render::render(surface, render_options);
+      const render::Image image = render::render(in.surface, render_options);
       render::write_png(options->out, image);
-      fmt::print("rendered {} ({} triangles{}) to {} ({} x {}) in {:.2f} s\n", options->input.string(), surface.num_triangles(),
+      fmt::print("rendered {} ({} triangles{}) to {} ({} x {}) in {:.2f} s\n", in.name, in.surface.num_triangles(),
                  options->wireframe_given ? fmt::format(", {} edges", render_options.lines.rows()) : std::string(),
                  options->out.string(), image.width, image.height, seconds_since(start));
       return 0;
@@ -839,12 +915,15 @@ void add_view_command(CLI::App& app, Action& action) {
   auto options = std::make_shared<Options>();
   CLI::App* command = app.add_subcommand(
       "view", "Write a web page that shows a result in any browser, offline (three.js inlined): orbit, colour by "
-              "piece, toggle the embedding tets, step through a simulation's frames");
+              "piece, toggle the embedding tets (or a cloth's triangle copies), step through a simulation's frames");
   command->add_option("IN", options->input,
-                      "A directory 'tetcut sim' wrote (its frames, with tet edges), a surface, or a tet mesh")
+                      "A directory 'tetcut sim' wrote (its frames, with the edges of its tets or of a cloth's triangle "
+                      "copies), a surface (e.g. what 'tetcut cut2d -o' writes), or a tet mesh")
       ->required();
   command->add_option("-o,--out", options->out, "The page to write (default: IN/view.html for a directory, IN.html for a file)");
-  command->add_option("--mesh", options->mesh, "A tet mesh whose edges to show with a surface file");
+  command->add_option("--mesh", options->mesh,
+                      "A mesh whose edges to show with a surface file: a tet mesh, or a surface such as 'tetcut cut2d "
+                      "--copies' writes (the triangle copies)");
   command->add_option("--title", options->title, "The page's title (default: IN's name)");
   command->callback([options, &action] {
     action = [options] {
@@ -863,8 +942,10 @@ void add_view_command(CLI::App& app, Action& action) {
       const std::string title = !options->title.empty() ? options->title : named.filename().string();
       view::write_page(out, title.empty() ? in.string() : title, frames);
       const bool edges = std::any_of(frames.begin(), frames.end(), [](const view::ViewFrame& f) { return f.mesh_edges.rows() > 0; });
+      const bool copies = std::any_of(frames.begin(), frames.end(), [](const view::ViewFrame& f) { return f.mesh_triangles; });
       fmt::print("wrote {} ({} frame{}{}, {:.1f} MB) in {:.2f} s; open it in a browser\n", out.string(), frames.size(),
-                 frames.size() == 1 ? "" : "s", edges ? ", with tet edges" : "", static_cast<double>(fs::file_size(out)) / 1e6, seconds_since(start));
+                 frames.size() == 1 ? "" : "s", !edges ? "" : copies ? ", with triangle-copy edges" : ", with tet edges",
+                 static_cast<double>(fs::file_size(out)) / 1e6, seconds_since(start));
       return 0;
     };
   });

@@ -3,7 +3,8 @@
 // rest plane, cut by polylines.
 //
 //   tetcut::PlanarCutter cutter(mesh);        // triangles counter-clockwise in the (x, y) plane
-//   cutter.cut(polylines);                    // any number of batches
+//   cutter.cut(polylines);                    // any number of batches, in rest space
+//   cutter.cut_deformed(blade, positions);    // or in world space, on the deformed cloth
 //   const tetcut::PlanarCutResult r = cutter.result();
 //   r.mesh.mesh        // one copy of a triangle per material component, sharing nodes across edges
 //   r.material         // the material (cells and boundary), embedded in the copies
@@ -12,9 +13,10 @@
 // along edges, overlap and repeat, and end inside a triangle. The guarantees are the 3D cutter's,
 // from the same exact machinery: points are meetings of lines (stored as planes through the z
 // axis in the intersection registry, with the rest plane as the third plane), and every decision
-// is a filtered side test with a GMP fallback. Only triangles a batch touches change; node and
-// copy ids, once given, stay.
+// is a filtered side test with a GMP fallback. World-space cuts are pulled back per copy through
+// its motion, as in 3D. Only triangles a batch touches change; node and copy ids, once given, stay.
 
+#include <tetcut/surface.hpp>
 #include <tetcut/types.hpp>
 
 #include <cstdint>
@@ -80,8 +82,9 @@ struct PlanarMaterial {
   std::vector<Index> triangle_copy;
   /// |S| x 2 vertex ids, material on the left going from the first to the second.
   Edges segments;
-  /// Per segment: the cut segment it lies on (numbered over all batches, in order), or -1 - e for
-  /// mesh edge e on the outer boundary (edges numbered as PlanarCutter::edge_nodes gives them).
+  /// Per segment: the cut it lies on, a rest-space segment or a world-space triangle (numbered
+  /// together over all batches, in order), or -1 - e for mesh edge e on the outer boundary (edges
+  /// numbered as PlanarCutter::edge_nodes gives them).
   std::vector<std::int64_t> segment_source;
   std::vector<Index> segment_copy;  ///< per segment: the copy whose material it bounds
 
@@ -99,8 +102,12 @@ struct PlanarCutResult {
 
 /// What one batch did, and what a simulator needs to carry its state over (see CutBatchReport).
 struct PlanarCutReport {
-  Index segments = 0;                ///< segments in the batch
-  std::vector<Index> degenerate;     ///< zero-length segments (batch numbering), skipped
+  Index segments = 0;                ///< segments in the batch (cut_deformed: triangles)
+  /// Zero-length segments (cut_deformed: zero-area triangles), numbered in the batch, skipped.
+  std::vector<Index> degenerate;
+  /// cut_deformed: copies lying in the plane of a cut triangle that reaches them, ascending. The
+  /// triangle would meet them in an area, not a line, so it does not cut them.
+  std::vector<Index> skipped_coplanar;
   std::vector<Index> touched;        ///< input triangles whose material changed, ascending
   Index first_new_node = 0;          ///< nodes from here on are new ...
   std::vector<Index> new_node_source;     ///< ... split from these nodes
@@ -120,7 +127,7 @@ struct RestPlane {
 /// bit for bit, at every vertex), with (u, v) ordered so that its triangles are counter-clockwise.
 /// Error(kInvalidInput) when no coordinate is constant or the triangles are not all of one
 /// orientation there (naming one that differs).
-PlanarMesh planar_mesh(const struct TriangleSurface& surface, RestPlane* plane);
+PlanarMesh planar_mesh(const TriangleSurface& surface, RestPlane* plane);
 /// Points in space (|P| x 3) to (u, v), dropping the normal coordinate; and back.
 Points2 to_plane(const Points& points, const RestPlane& plane);
 Points to_space(const Points2& points, const RestPlane& plane);
@@ -142,11 +149,26 @@ class PlanarCutter {
   /// plus O(T) to recount the pieces.
   PlanarCutReport cut(std::span<const Polyline> batch);
 
+  /// Cuts in world space, on the cut mesh with its nodes at `nodes` (num_nodes() x 3, e.g. the
+  /// cloth as it hangs), by a batch of triangles (e.g. the strip a blade sweeps, swept_blade, or a
+  /// polyline pushed through the cloth). Each triangle copy that a triangle reaches in its current
+  /// shape is cut along the pre-image of what the triangle meets of it: the triangle's plane and
+  /// its edges' walls pulled back through the copy's own affine motion (as Cutter::cut_deformed
+  /// does per tet), inserted into that copy's cells only. The pull-backs are exact, and on an edge
+  /// they depend only on its two nodes, so copies sharing an edge and its nodes cut it at the very
+  /// same registered point. A copy lying in a triangle's plane where the triangle reaches it is
+  /// not cut by it and is reported (skipped_coplanar); zero-area triangles are skipped and
+  /// reported. Throws Error(kInvalidInput), changing nothing, for a non-finite or missing corner,
+  /// a wrong number of node positions or a non-finite one. Cost: O(copies) to find those near the
+  /// batch (a pass over their current boxes), then as cut() per copy a triangle reaches.
+  PlanarCutReport cut_deformed(const TriangleSurface& batch, const Points& nodes);
+
   /// Maps points on the mesh in its deformed positions (|P| x 3, e.g. a blade drawn on the cloth)
   /// to rest coordinates: each through the affine motion of the triangle copy nearest to it (in
   /// world space, over copies that are not degenerate in `nodes`). Geometry, not topology: the
-  /// result is rounded, and cutting along it is then a rest-space cut, so neighbouring triangles
-  /// agree exactly. O(copies) per point.
+  /// result is rounded (cut_deformed is the exact world-space cut); cutting along it is a
+  /// rest-space cut, for a path that must follow the material across batches while the cloth
+  /// moves. O(copies) per point.
   Points2 to_rest(const Points& world, const Points& nodes) const;
 
   PlanarCutResult result() const;

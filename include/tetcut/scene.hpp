@@ -46,13 +46,48 @@
 //                  a live session's events, as it records them (see tetcut/session.hpp); world space
 //     "springs":   [{"time", "cuts": [FIRST, LAST], "stiffness"}]   close those cut events' incisions
 //     "output":    {"mesh": true, "surface": true,
-//                   "picture": {"box": [...], "azimuth", "elevation"}} }   the camera of pictures
-//                   (tetcut sim --png): the region to frame (default: the first frame grown by
-//                   half) and the view angles in degrees (default 35 and 25)
+//                   "picture": {"box": [...], "azimuth", "elevation", "zoom", "size": [w, h]}} }
+//                   the camera of pictures (tetcut sim --png): the region to frame (default: the
+//                   first frame grown by half), the view angles in degrees (default 35 and 25), the
+//                   zoom (1 fits the region) and the size in pixels (default 640 x 480)
 //
 // Paths are relative to the scene file. Unknown keys are errors, so a typo is never ignored.
+//
+// A cloth scene (the 2D version: a planar triangle mesh cut by polylines, simulated in 3D by
+// tetcut::sim::ClothSimulator) has "cloth" instead of "mesh" and "material":
+//
+//   { "cloth":    {"mesh": {"file": PATH}  (required: a triangle surface in a coordinate plane)
+//                          | {"grid": {"cells": N, "size": S, "origin": [x,y,z], "plane": "xy"|"xz"|"yz"}},
+//                  "material": {"density" (kg/m^2), "stretch_stiffness" (N/m), "poisson_ratio",
+//                               "bending_stiffness" (N m), "mass_damping" (1/s)}}
+//     "gravity", "time", "pin", "output":  as above ("time.dt" defaults to 1/60 s)
+//     "solver":   {"tolerance", "max_newton_iterations"}   (ClothStepOptions)
+//     "cuts":     [{"time", "until" (rest space only), "space": "rest"|"world" (default "world",
+//                   as above), and one of
+//                    "polyline": [[x,y,z], ...] (with "closed": true|false) | "polylines": PATH
+//                    (OBJ l, VTK or VTP lines, or a point list, as tetcut cut2d reads)
+//                    | "spiral": {"centre": [x,y,z], "outer_radius", "spacing", "inner_radius"
+//                                 (default: spacing), "step" (default: spacing / 8), "from": [x,y,z]}
+//                    | "blade": {"poses": [[ax,ay,az, bx,by,bz], ...]} | "triangles": PATH;
+//                   and with a polyline in world space "through": [dx,dy,dz]}]
+//   }
+//
+// The mesh starts where its rest positions put it in space (a file's own coordinates; a grid's
+// (u, v) added to the origin's coordinates on the plane's two axes). Rest-space cuts are polylines
+// in the rest plane (given in space: the plane's normal coordinate is dropped), or a spiral in it
+// (tetcut::spiral, Figure 1's cut, led in from the point "from" when given). With "until": T they
+// are cut progressively: each step, the stretch from where the cut had got to as far along the
+// polylines' length as the time since "time" goes towards T (ending between two of their points
+// where it falls there; the next stretch starts at that very point). World-space cuts are placed
+// on the cloth as it is at that time (PlanarCutter::cut_deformed, exact): the strip a blade sweeps
+// through its poses, triangles from a file, or a polyline pushed through the cloth along
+// "through" (the strip between the polyline moved by -through and by +through). A world-space cut
+// happens at one time: stretches placed on the moving cloth at different times would not meet in
+// the material. Keys of the tet scenes that a cloth has not ("mesh", "material", "obstacles",
+// "scalpels", "events", ...) are errors in a cloth scene.
 
 #include <tetcut/blade.hpp>
+#include <tetcut/cloth.hpp>
 #include <tetcut/cutter.hpp>
 #include <tetcut/embed.hpp>
 #include <tetcut/sim.hpp>
@@ -113,8 +148,32 @@ struct SceneMove {
   double from = 0, until = std::numeric_limits<double>::infinity();
 };
 
+/// A timed cut of a cloth scene.
+struct ClothCut {
+  double time = 0;
+  /// Rest space: cut progressively until then, the polylines' points reached evenly along their
+  /// length; equal to `time`: at once.
+  double until = 0;
+  bool world_space = true;
+  std::string description;  ///< e.g. "spiral" or the file name
+  std::vector<Polyline> polylines;  ///< rest space: in the plane's (u, v) coordinates
+  TriangleSurface triangles;        ///< world space
+};
+
+/// The 2D version in a scene: a planar mesh lying in a coordinate plane of space.
+struct ClothScene {
+  PlanarMesh mesh;
+  RestPlane plane;  ///< where the rest mesh lies in space: the cloth's first positions
+  sim::ClothMaterial material;
+  sim::ClothStepOptions step;  ///< dt and gravity as the scene's
+  std::vector<ClothCut> cuts;  ///< sorted by time
+};
+
 struct Scene {
   std::filesystem::path source;
+  /// Set for a cloth scene; then the tet-mesh parts below (mesh, material, obstacles, ...) are
+  /// unused, and `pins`, `duration`, `output_every` and the output settings apply to the cloth.
+  std::optional<ClothScene> cloth;
   TetMesh mesh;
   std::optional<TriangleSurface> embed_surface;
   EmbedOptions embed_options;
@@ -139,7 +198,8 @@ struct Scene {
   bool write_mesh = true, write_surface = true;
   /// Where pictures of the frames look (for a renderer; the scene does not draw).
   std::optional<Box> picture_box;
-  double picture_azimuth = 35, picture_elevation = 25;
+  double picture_azimuth = 35, picture_elevation = 25, picture_zoom = 1;
+  int picture_width = 640, picture_height = 480;
 };
 
 /// Reads and validates a scene. Throws Error(kInvalidInput) naming the file and the key path
@@ -149,14 +209,24 @@ Scene load_scene(const std::filesystem::path& path);
 /// relative to its directory.
 Scene parse_scene(std::string_view text, const std::filesystem::path& path);
 
+/// What an output frame shows.
+struct SceneFrame {
+  TriangleSurface surface;  ///< the material surface (for a cloth: its cells), where it is now
+  /// Lines over it: |E| x 2 rows of `line_points` (a cloth's triangle copies; empty for tets).
+  Points line_points;
+  Edges lines;
+};
+
 struct SceneRunOptions {
   int max_frames = -1;  ///< stop after this many output frames (after frame 0); -1: run to the end
   /// Called after each output frame with (frame, frames expected).
   std::function<void(int, int)> progress;
-  /// Called with each output frame's material surface (e.g. to render it).
-  std::function<void(int, const TriangleSurface&)> frame_surface;
+  /// Called with each output frame (e.g. to render it): its material surface where it is now,
+  /// and for a cloth the edges of its triangle copies as lines (none for tets).
+  std::function<void(int, const SceneFrame&)> frame_surface;
   /// Count, at each output frame, the pairs of surface triangles of different tet copies that
-  /// intersect (count_surface_intersections): SceneSummary::intersecting_pairs.
+  /// intersect (count_surface_intersections): SceneSummary::intersecting_pairs. Not for cloth
+  /// scenes (Error(kInvalidArgument)).
   bool check_intersections = false;
 };
 
@@ -172,6 +242,12 @@ struct SceneStageSeconds {
 struct SceneSummary {
   int frames = 0, steps = 0, cuts_applied = 0;
   Index tets = 0, nodes = 0, pieces = 0;
+  /// A cloth scene: its input triangles and triangle copies at the end (tets stays 0), the pieces'
+  /// areas (largest first), and the copies world-space cuts left uncut as coplanar with a blade.
+  bool cloth = false;
+  Index triangles_in = 0, triangle_copies = 0;
+  std::vector<double> piece_areas;
+  Index skipped_coplanar = 0;
   double simulated_seconds = 0;
   double wall_seconds = 0, seconds_per_frame = 0;
   double mean_newton_iterations = 0, mean_cg_iterations = 0;
@@ -202,7 +278,9 @@ struct SceneSummary {
 
 /// Runs the scene, writing into `directory`: mesh_NNNN.vtu (the simulation mesh, piece and
 /// material fraction per tet) and surface_NNNN.vtp (the material surface) per output frame,
-/// mesh.pvd and surface.pvd (ParaView series with their times) and summary.json.
+/// mesh.pvd and surface.pvd (ParaView series with their times) and summary.json. A cloth scene
+/// writes mesh_NNNN.vtp (its triangle copies) and surface_NNNN.vtp (the material, the cells of
+/// the cut as triangles) where they are at each frame.
 SceneSummary run_scene(const Scene& scene, const std::filesystem::path& directory, const SceneRunOptions& options = {});
 
 }  // namespace tetcut

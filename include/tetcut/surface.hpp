@@ -14,4 +14,8 @@ struct TriangleSurface {
   Index num_triangles() const { return static_cast<Index>(triangles.rows()); }
 };
 
+/// The distinct edges of a set of triangles (|F| x 3 vertex ids), each once with its smaller id
+/// first, sorted: |E| x 2. For drawing a mesh's edges. O(F log F).
+Edges triangle_edges(const Triangles& triangles);
+
 }  // namespace tetcut

@@ -20,9 +20,11 @@ struct ViewFrame {
   /// Simulated time, shown with the frame number; NaN for none.
   double time = std::numeric_limits<double>::quiet_NaN();
   TriangleSurface surface;
-  /// The embedding tet mesh's edges (rows of `mesh_points`); none when empty.
+  /// The embedding mesh's edges (rows of `mesh_points`); none when empty.
   Points mesh_points;
   Edges mesh_edges;
+  /// Whether those are a triangle mesh's (a cloth's triangle copies) rather than tets'.
+  bool mesh_triangles = false;
 };
 
 /// The page's HTML. Frames whose triangles, pieces or edges equal the frame before them share
@@ -36,11 +38,12 @@ std::string page(const std::string& title, const std::vector<ViewFrame>& frames)
 void write_page(const std::filesystem::path& path, const std::string& title, const std::vector<ViewFrame>& frames);
 
 /// What `tetcut view` shows:
-/// - a directory that `tetcut sim` wrote: its surface.pvd series, with the tet edges of the
-///   matching mesh.pvd frames when that series exists;
+/// - a directory that `tetcut sim` wrote: its surface.pvd series, with the edges of the matching
+///   mesh.pvd frames when that series exists (tets, or a cloth scene's triangle copies);
 /// - a surface file: one frame;
 /// - a tet mesh file: its boundary, with its edges.
-/// `mesh` (optional) adds the edges of that tet mesh to every frame of a surface file.
+/// `mesh` (optional) adds the edges of that mesh to every frame of a surface file: a tet mesh, or
+/// a triangle surface (e.g. the triangle copies `tetcut cut2d --copies` writes).
 /// Errors name the file: Error(kInvalidInput) for a directory without surface.pvd, or series of
 /// different lengths.
 std::vector<ViewFrame> load_frames(const std::filesystem::path& input, const std::filesystem::path& mesh = {});

@@ -8,9 +8,6 @@
 #include <tetcut/error.hpp>
 
 #include <algorithm>
-#include <deque>
-#include <map>
-#include <unordered_map>
 #include <chrono>
 #include <cmath>
 #include <string>
@@ -34,11 +31,6 @@ namespace tetcut {
 namespace {
 
 void check_batch(const TriangleSurface& batch) { check_triangles(batch, "cut"); }
-
-std::array<Vec3, 3> corners_of(const TriangleSurface& batch, Index i) {
-  return {batch.vertices.row(batch.triangles(i, 0)).transpose(), batch.vertices.row(batch.triangles(i, 1)).transpose(),
-          batch.vertices.row(batch.triangles(i, 2)).transpose()};
-}
 
 spatial::Aabb box_of(const std::array<Vec3, 3>& corners) {
   spatial::Aabb box;
@@ -70,7 +62,7 @@ void Cutter::State::insert_rest(const TriangleSurface& batch, CutBatchReport* re
   report->triangles = batch.num_triangles();
   std::vector<cells::PreparedTriangle> prepared;
   for (Index i = 0; i < batch.num_triangles(); ++i) {
-    const std::array<Vec3, 3> x = corners_of(batch, i);
+    const std::array<Vec3, 3> x = triangle_corners(batch, i);
     const std::int32_t id = next_id(batch.num_triangles() - i);
     if (geometry::collinear(x[0], x[1], x[2])) {
       report->degenerate.push_back(i);
@@ -224,7 +216,7 @@ CutBatchReport Cutter::cut_deformed(const TriangleSurface& batch) {
   report.triangles = batch.num_triangles();
   std::vector<Index> candidates, touched;
   for (Index i = 0; i < batch.num_triangles(); ++i) {
-    const std::array<Vec3, 3> corners = corners_of(batch, i);
+    const std::array<Vec3, 3> corners = triangle_corners(batch, i);
     const std::int32_t id = s.next_id(batch.num_triangles() - i);
     if (geometry::collinear(corners[0], corners[1], corners[2])) {
       report.degenerate.push_back(i);

@@ -102,4 +102,31 @@ TriangleSurface cookie_cutter(std::span<const Eigen::Vector2d> profile, const Ve
   return strip(lower, upper, true);
 }
 
+Points2 spiral(const Eigen::Vector2d& centre, double outer_radius, double inner_radius, double spacing, double step) {
+  const bool finite = centre.allFinite() && std::isfinite(outer_radius) && std::isfinite(inner_radius) &&
+                      std::isfinite(spacing) && std::isfinite(step);
+  if (!finite || !(step > 0) || !(spacing > 0) || !(outer_radius > 0) || !(inner_radius >= 0 && inner_radius <= outer_radius)) {
+    throw Error(ErrorKind::kInvalidArgument,
+                "a spiral needs a positive step, spacing and outer radius, and an inner radius from 0 to the outer one");
+  }
+  // Its length is about pi (R^2 - r^2) / spacing, the points that over step (each at least step
+  // apart at the largest radius, closer inside): bound the count before making them.
+  constexpr double kMaxPoints = 1e7;
+  const double turns = (outer_radius - inner_radius) / spacing;
+  if (2 * std::numbers::pi * turns * outer_radius / step > kMaxPoints) {
+    throw Error(ErrorKind::kInvalidArgument, "a spiral of more than ten million points: give a larger step or spacing");
+  }
+  std::vector<Eigen::Vector2d> points;
+  for (double turned = 0;;) {
+    const double r = outer_radius - spacing * turned / (2 * std::numbers::pi);
+    if (r < inner_radius || r <= 0) break;
+    const double angle = -std::numbers::pi / 2 - turned;
+    points.push_back(centre + r * Eigen::Vector2d(std::cos(angle), std::sin(angle)));
+    turned += step / r;  // about `step` of arc
+  }
+  Points2 out(static_cast<Index>(points.size()), 2);
+  for (std::size_t i = 0; i < points.size(); ++i) out.row(static_cast<Index>(i)) = points[i].transpose();
+  return out;
+}
+
 }  // namespace tetcut

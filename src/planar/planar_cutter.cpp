@@ -19,7 +19,9 @@
 
 #include "collision/proximity.hpp"
 #include "geometry/predicates.hpp"
+#include "mesh/surface_checks.hpp"
 #include "planar/triangle_arrangement.hpp"
+#include "registry/plane_book.hpp"
 #include "spatial/box_tree.hpp"
 #include "util/union_find.hpp"
 
@@ -72,8 +74,14 @@ struct PlanarCutter::State {
   // Per mesh edge: the copy pairs joined across it, cached until a triangle on it changes.
   std::vector<std::vector<std::array<Index, 2>>> edge_joins;
   std::vector<std::uint8_t> edge_joins_valid;
+  // World planes of cuts placed on the deformed mesh, and their pull-backs per copy.
+  registry::PlaneBook planes;
 
   planar::TriangleArrangement& refine(Index t);
+  // Inserts a segment into triangle t's cells; marks t when its material changed.
+  void insert(Index t, const planar::PreparedSegment& segment, std::vector<std::uint8_t>* touched);
+  // Components, copies and nodes of the marked triangles; fills the rest of the report.
+  void finish_batch(const std::vector<std::uint8_t>& touched, PlanarCutReport* report);
   planar::PreparedSegment prepare(const Vec3& p, const Vec3& q, std::int64_t id);
   const std::vector<std::array<Index, 2>>& joins(Index edge);
   planar::SideIntervals side(Index t, int k) const;
@@ -374,6 +382,35 @@ PlanarCutter::~PlanarCutter() = default;
 PlanarCutter::PlanarCutter(PlanarCutter&&) noexcept = default;
 PlanarCutter& PlanarCutter::operator=(PlanarCutter&&) noexcept = default;
 
+void PlanarCutter::State::insert(Index t, const planar::PreparedSegment& segment, std::vector<std::uint8_t>* touched) {
+  const bool was_refined = arrangements[t] != nullptr;
+  if (refine(t).insert(geometry, segment)) {
+    (*touched)[t] = 1;
+  } else if (!was_refined) {
+    arrangements[t].reset();  // the segment missed it: keep it one implicit cell
+  }
+}
+
+void PlanarCutter::State::finish_batch(const std::vector<std::uint8_t>& touched, PlanarCutReport* report) {
+  for (std::size_t t = 0; t < touched.size(); ++t) {
+    if (touched[t]) report->touched.push_back(static_cast<Index>(t));
+  }
+  for (const Index t : report->touched) {
+    update_copies(t, report);
+    for (int k = 0; k < 3; ++k) edge_joins_valid[triangle_edges[t][k]] = 0;
+  }
+  std::vector<Index> nodes;
+  for (const Index t : report->touched) {
+    for (int k = 0; k < 3; ++k) nodes.push_back(input.triangles(t, k));
+  }
+  std::sort(nodes.begin(), nodes.end());
+  nodes.erase(std::unique(nodes.begin(), nodes.end()), nodes.end());
+  for (const Index n : nodes) recollapse(n, report);
+  std::sort(report->changed_triangles.begin(), report->changed_triangles.end());
+  report->changed_triangles.erase(std::unique(report->changed_triangles.begin(), report->changed_triangles.end()),
+                                  report->changed_triangles.end());
+}
+
 PlanarCutReport PlanarCutter::cut(std::span<const Polyline> batch) {
   State& s = *state_;
   // Check everything first, so that a bad batch changes nothing.
@@ -406,33 +443,132 @@ PlanarCutReport PlanarCutter::cut(std::span<const Polyline> batch) {
       box.extend(q);
       candidates.clear();
       s.triangle_tree.query(box, &candidates);
-      for (const Index t : candidates) {
-        const bool was_refined = s.arrangements[t] != nullptr;
-        if (s.refine(t).insert(s.geometry, segment)) {
-          touched[t] = 1;
-        } else if (!was_refined) {
-          s.arrangements[t].reset();  // the segment missed it: keep it one implicit cell
-        }
-      }
+      for (const Index t : candidates) s.insert(t, segment, &touched);
     }
   }
-  for (std::size_t t = 0; t < touched.size(); ++t) {
-    if (touched[t]) report.touched.push_back(static_cast<Index>(t));
+  s.finish_batch(touched, &report);
+  return report;
+}
+
+namespace {
+// Signs of a plane at three points: how many are positive, zero, negative.
+struct SignCount {
+  int positive = 0, zero = 0, negative = 0;
+};
+SignCount signs_at(const geometry::Plane& plane, int sign, const std::array<Vec3, 3>& points) {
+  SignCount c;
+  for (const Vec3& x : points) {
+    const int s = sign * geometry::side_of_point(plane, x);
+    (s > 0 ? c.positive : s < 0 ? c.negative : c.zero) += 1;
   }
-  for (const Index t : report.touched) {
-    s.update_copies(t, &report);
-    for (int k = 0; k < 3; ++k) s.edge_joins_valid[s.triangle_edges[t][k]] = 0;
+  return c;
+}
+}  // namespace
+
+PlanarCutReport PlanarCutter::cut_deformed(const TriangleSurface& batch, const Points& nodes) {
+  State& s = *state_;
+  check_triangles(batch, "cut");
+  if (nodes.rows() != num_nodes() || nodes.cols() != 3) {
+    throw Error(ErrorKind::kInvalidInput, "cut_deformed: " + std::to_string(nodes.rows()) + " node positions for " +
+                                              std::to_string(num_nodes()) + " nodes");
   }
-  std::vector<Index> nodes;
-  for (const Index t : report.touched) {
-    for (int k = 0; k < 3; ++k) nodes.push_back(s.input.triangles(t, k));
+  if (!nodes.allFinite()) throw Error(ErrorKind::kInvalidInput, "cut_deformed: a node position is not finite");
+  PlanarCutReport report;
+  report.first_new_node = num_nodes();
+  report.first_new_triangle = num_triangles();
+  report.segments = batch.num_triangles();
+
+  // The copies near the batch in their current shapes: a pass over all copies' current boxes
+  // against the batch's box (O(copies)), then a tree over those near it (O(k log k)). Box
+  // comparisons are exact, so no copy a triangle reaches is missed.
+  spatial::Aabb reach;
+  for (Index v = 0; v < batch.num_vertices(); ++v) reach.extend(batch.vertices.row(v).transpose());
+  std::vector<Index> near;
+  std::vector<spatial::Aabb> boxes;
+  for (Index c = 0; c < num_triangles(); ++c) {
+    spatial::Aabb box;
+    for (const Index n : s.copy_nodes[c]) box.extend(nodes.row(n).transpose());
+    if (!box.meets(reach)) continue;
+    near.push_back(c);
+    boxes.push_back(box);
   }
-  std::sort(nodes.begin(), nodes.end());
-  nodes.erase(std::unique(nodes.begin(), nodes.end()), nodes.end());
-  for (const Index n : nodes) s.recollapse(n, &report);
-  std::sort(report.changed_triangles.begin(), report.changed_triangles.end());
-  report.changed_triangles.erase(std::unique(report.changed_triangles.begin(), report.changed_triangles.end()),
-                                 report.changed_triangles.end());
+  const spatial::BoxTree current(std::move(boxes));
+  s.planes.forget_pulled_back();  // pulled back through other positions
+
+  std::vector<std::uint8_t> touched(s.arrangements.size(), 0);
+  std::vector<Index> candidates;
+  for (Index i = 0; i < batch.num_triangles(); ++i) {
+    const std::array<Vec3, 3> corners = triangle_corners(batch, i);
+    const std::int64_t id = s.next_segment_id++;
+    if (geometry::collinear(corners[0], corners[1], corners[2])) {
+      report.degenerate.push_back(i);
+      continue;
+    }
+    // The triangle in world space: its plane, and its edges' walls oriented towards the opposite
+    // corner, as the 3D cutter makes them (shared with earlier triangles on the same plane or edge).
+    using Found = registry::PlaneBook::Found;
+    const Found plane = s.planes.triangle_plane(geometry::Plane::through(corners[0], corners[1], corners[2]), 4 * id);
+    const int axis = geometry::wall_axis(*plane.plane);
+    std::array<Found, 3> walls;
+    for (int e = 0; e < 3; ++e) walls[e] = s.planes.wall(corners[e], corners[(e + 1) % 3], axis, corners[(e + 2) % 3], 4 * id + 1 + e);
+    spatial::Aabb box;
+    for (const Vec3& x : corners) box.extend(x);
+    candidates.clear();
+    current.query(box, &candidates);
+    for (const Index candidate : candidates) {
+      const Index copy = near[candidate];
+      const std::array<Vec3, 3> now = {nodes.row(s.copy_nodes[copy][0]).transpose(), nodes.row(s.copy_nodes[copy][1]).transpose(),
+                                       nodes.row(s.copy_nodes[copy][2]).transpose()};
+      // The pull-backs are affine on the copy, so their signs at its corners bound them: a plane
+      // on one side (touching at most a corner) misses it; a wall the copy is inside of bounds
+      // nothing there; one it is outside of (touching at most a corner) leaves no cut in it.
+      const SignCount on_plane = signs_at(*plane.plane, 1, now);
+      if (on_plane.zero == 3) {
+        report.skipped_coplanar.push_back(copy);  // the cut would be an area, not a line
+        continue;
+      }
+      if ((on_plane.positive == 0 || on_plane.negative == 0) && on_plane.zero <= 1) continue;
+      std::array<int, 3> kept{};
+      int num_kept = 0;
+      bool misses = false;
+      for (int e = 0; e < 3 && !misses; ++e) {
+        const SignCount on_wall = signs_at(*walls[e].plane, walls[e].sign, now);
+        if (on_wall.negative == 0) continue;
+        misses = on_wall.positive == 0 && on_wall.zero <= 1;
+        kept[num_kept++] = e;
+      }
+      if (misses) continue;
+      // Pulled back through the copy's motion. A planar triangle is lifted to the tet over it
+      // with its fourth corner one unit above its first, moving with that corner: the pull-back's
+      // trace on the rest plane (all that the planar cutter uses) is the interpolation of the
+      // world plane's values at the copy's three current corners, and the plane is vertical, a
+      // line like every other line here. Copies sharing an edge and its nodes agree on it exactly.
+      const Index t = s.copy_triangle[copy];
+      std::array<Vec3, 4> rest, moved;
+      for (int k = 0; k < 3; ++k) {
+        rest[k] = s.rest3.row(s.input.triangles(t, k)).transpose();
+        moved[k] = now[k];
+      }
+      rest[3] = rest[0] + Vec3::UnitZ();
+      moved[3] = now[0];
+      const auto pulled = [&](const Found& found) {
+        return s.planes.per_copy(found.key, copy, [&] {
+          return s.geometry.registry.add_plane(geometry::Plane::pulled_back(*found.plane, rest, moved, found.key));
+        });
+      };
+      planar::PreparedSegment segment;
+      segment.id = id;
+      segment.label = copy;
+      segment.line = pulled(plane);
+      segment.num_walls = num_kept;
+      for (int w = 0; w < num_kept; ++w) segment.walls[w] = {pulled(walls[kept[w]]), walls[kept[w]].sign};
+      s.insert(t, segment, &touched);
+    }
+  }
+  std::sort(report.skipped_coplanar.begin(), report.skipped_coplanar.end());
+  report.skipped_coplanar.erase(std::unique(report.skipped_coplanar.begin(), report.skipped_coplanar.end()),
+                                report.skipped_coplanar.end());
+  s.finish_batch(touched, &report);
   return report;
 }
 

@@ -52,7 +52,9 @@ bool TriangleArrangement::insert(PlanarGeometry& geometry, const PreparedSegment
   bool changed = false;
   // Faces made by this insertion lie on one side of the segment's line: nothing more to do there.
   const int existing = static_cast<int>(faces_.size());
-  for (int f = 0; f < existing; ++f) changed |= insert_into_face(geometry, f, segment);
+  for (int f = 0; f < existing; ++f) {
+    if (segment.label < 0 || faces_[f].label == segment.label) changed |= insert_into_face(geometry, f, segment);
+  }
   return changed;
 }
 
@@ -89,54 +91,89 @@ void TriangleArrangement::cover(std::int32_t h, std::int64_t id) {
 }
 
 namespace {
-// A point of a chord or a collinear edge and its sides of the segment's two end walls.
+// Sides of a point on the segment's line relative to each of its walls (+1 for walls it has not).
+using WallSides = std::array<int, PreparedSegment::kMaxWalls>;
+
+bool inside(const WallSides& s) { return s[0] >= 0 && s[1] >= 0 && s[2] >= 0; }
+
+WallSides wall_sides(const PlanarGeometry& geometry, VertexId v, const PreparedSegment& segment) {
+  WallSides s = {1, 1, 1};
+  for (int w = 0; w < segment.num_walls; ++w) s[w] = geometry.side(v, segment.walls[w]);
+  return s;
+}
+
+// A point of a chord or a collinear edge and its sides of the segment's walls.
 struct ChainPoint {
   VertexId vertex;
-  std::array<int, 2> wall_side;
+  WallSides wall_side;
 };
 
-// Whether the piece between two points of the segment's line lies inside the segment.
-bool inside_segment(const ChainPoint& a, const ChainPoint& b) {
-  return a.wall_side[0] >= 0 && b.wall_side[0] >= 0 && a.wall_side[1] >= 0 && b.wall_side[1] >= 0;
-}
+// What the segment makes of the stretch from a to b of a line it lies on (`carrier`, the plane the
+// stretch's points are made on), from the points' sides of its walls: whether they overlap with
+// positive length, and the segment's ends strictly between them, in order from a. The segment is
+// an interval of the line (the walls' positive sides are convex), so where the stretch enters it
+// is a wall's crossing, strictly between a and b, with a on the wall's negative side and inside
+// every other wall; where it leaves, the same with a on the positive side. Two walls may cross the
+// line at one point (a cut triangle's corner on the cloth): then either names it. When the entry
+// and the exit are one point the stretch only touches the segment.
+struct Ends {
+  bool overlaps = false;
+  int count = 0;
+  std::array<int, 2> wall{};           ///< the wall each end lies on
+  std::array<WallSides, 2> sides{};    ///< the end's sides of every wall
+};
 
-// Whether the stretch of the segment's line between a and b overlaps the segment with positive
-// length: it does unless both ends lie on the outer side of one end wall.
-bool overlaps_segment(const std::array<int, 2>& a, const std::array<int, 2>& b) {
-  return !(a[0] <= 0 && b[0] <= 0) && !(a[1] <= 0 && b[1] <= 0);
-}
-
-// The segment's ends that lie strictly between a and b (both on its line), in order from a.
-std::vector<int> ends_between(const std::array<int, 2>& a, const std::array<int, 2>& b) {
-  std::vector<int> ends;
-  const bool start_inside = a[0] * b[0] < 0, end_inside = a[1] * b[1] < 0;
-  if (start_inside && end_inside) {
-    // a beyond the start wall comes before the start.
-    if (a[0] < 0) ends = {0, 1};
-    else ends = {1, 0};
-  } else if (start_inside) {
-    ends = {0};
-  } else if (end_inside) {
-    ends = {1};
+Ends ends_between(const PlanarGeometry& geometry, PlaneId carrier, const PreparedSegment& segment, const WallSides& a,
+                  const WallSides& b) {
+  std::array<int, 2> found = {-1, -1};  // entry, exit
+  std::array<WallSides, 2> found_sides{};
+  for (int w = 0; w < segment.num_walls; ++w) {
+    if (a[w] * b[w] >= 0) continue;
+    const int slot = a[w] < 0 ? 0 : 1;
+    if (found[slot] >= 0) continue;
+    WallSides at = {1, 1, 1};
+    at[w] = 0;
+    bool within = true;
+    for (int j = 0; j < segment.num_walls && within; ++j) {
+      if (j == w) continue;
+      at[j] = segment.walls[j].sign *
+              geometry.registry.side_of_meet(carrier, segment.walls[w].id, geometry.rest_plane, segment.walls[j].id);
+      within = at[j] >= 0;
+    }
+    if (!within) continue;
+    found[slot] = w;
+    found_sides[slot] = at;
   }
+  Ends ends;
+  if (found[0] >= 0 && found[1] >= 0 && found_sides[0][found[1]] == 0) return ends;  // a single point
+  // The chain a, entry, exit, b: a piece lies in the segment when both its ends do.
+  bool previous_inside = inside(a);
+  for (int slot = 0; slot < 2; ++slot) {
+    if (found[slot] < 0) continue;
+    ends.overlaps |= previous_inside;
+    previous_inside = true;
+    ends.wall[ends.count] = found[slot];
+    ends.sides[ends.count] = found_sides[slot];
+    ++ends.count;
+  }
+  ends.overlaps |= previous_inside && inside(b);
   return ends;
 }
 
-// At the segment's end w: on wall w, inside the other.
-std::array<int, 2> end_sides(int w) { return w == 0 ? std::array<int, 2>{0, 1} : std::array<int, 2>{1, 0}; }
+bool inside_segment(const ChainPoint& a, const ChainPoint& b) { return inside(a.wall_side) && inside(b.wall_side); }
 }  // namespace
 
 bool TriangleArrangement::cover_collinear(PlanarGeometry& geometry, std::int32_t h, const PreparedSegment& segment) {
   const VertexId u = half_edges_[h].origin, v = half_edges_[half_edges_[h].twin].origin;
-  const std::array<int, 2> su = {geometry.side(u, segment.walls[0]), geometry.side(u, segment.walls[1])};
-  const std::array<int, 2> sv = {geometry.side(v, segment.walls[0]), geometry.side(v, segment.walls[1])};
-  if (!overlaps_segment(su, sv)) return false;
+  const WallSides su = wall_sides(geometry, u, segment), sv = wall_sides(geometry, v, segment);
+  const Ends ends = ends_between(geometry, half_edges_[h].line, segment, su, sv);
+  if (!ends.overlaps) return false;
   std::vector<ChainPoint> chain = {{u, su}};
   std::vector<std::int32_t> pieces = {h};
-  for (const int w : ends_between(su, sv)) {
-    const VertexId point = point_on_edge(geometry, pieces.back(), segment.walls[w].id);
+  for (int i = 0; i < ends.count; ++i) {
+    const VertexId point = point_on_edge(geometry, pieces.back(), segment.walls[ends.wall[i]].id);
     pieces.push_back(split_edge(pieces.back(), point));
-    chain.push_back({point, end_sides(w)});
+    chain.push_back({point, ends.sides[i]});
   }
   chain.push_back({v, sv});
   bool changed = false;
@@ -180,17 +217,17 @@ bool TriangleArrangement::insert_into_face(PlanarGeometry& geometry, int face, c
   struct Crossing {
     int index;
     bool at_corner;
-    std::array<int, 2> wall_side;
+    WallSides wall_side;
   };
   std::array<Crossing, 2> crossings{};
   int found = 0;
   for (int i = 0; i < m && found < 2; ++i) {
     const HalfEdge& e = half_edges_[loop[i]];
     if (sides[i] == 0) {
-      crossings[found++] = {i, true, {geometry.side(e.origin, segment.walls[0]), geometry.side(e.origin, segment.walls[1])}};
+      crossings[found++] = {i, true, wall_sides(geometry, e.origin, segment)};
     } else if (sides[i] * sides[(i + 1) % m] < 0) {
-      std::array<int, 2> wall_side{};
-      for (int w = 0; w < 2; ++w) {
+      WallSides wall_side = {1, 1, 1};
+      for (int w = 0; w < segment.num_walls; ++w) {
         wall_side[w] = segment.walls[w].sign *
                        registry.side_of_meet(segment.line, e.line, geometry.rest_plane, segment.walls[w].id);
       }
@@ -198,7 +235,8 @@ bool TriangleArrangement::insert_into_face(PlanarGeometry& geometry, int face, c
     }
   }
   if (found != 2) throw std::logic_error("planar: a line crossing a convex cell does not cross its boundary twice");
-  if (!overlaps_segment(crossings[0].wall_side, crossings[1].wall_side)) return false;
+  const Ends ends = ends_between(geometry, segment.line, segment, crossings[0].wall_side, crossings[1].wall_side);
+  if (!ends.overlaps) return false;
 
   // Make both crossings corners of the cell.
   std::array<std::int32_t, 2> from{};
@@ -211,9 +249,9 @@ bool TriangleArrangement::insert_into_face(PlanarGeometry& geometry, int face, c
     }
   }
   std::vector<ChainPoint> chain = {{half_edges_[from[0]].origin, crossings[0].wall_side}};
-  for (const int w : ends_between(crossings[0].wall_side, crossings[1].wall_side)) {
+  for (int i = 0; i < ends.count; ++i) {
     // The segment's end lies strictly inside the chord, so inside the open cell: a new point.
-    chain.push_back({geometry.interior_point(segment.line, segment.walls[w].id), end_sides(w)});
+    chain.push_back({geometry.interior_point(segment.line, segment.walls[ends.wall[i]].id), ends.sides[i]});
   }
   chain.push_back({half_edges_[from[1]].origin, crossings[1].wall_side});
 

@@ -53,12 +53,18 @@ struct PlanarGeometry {
   VertexId interior_point(PlaneId a, PlaneId b);
 };
 
-/// A cut segment ready to insert: its line, and walls through its ends oriented so that the
-/// segment's interior is on their positive side.
+/// A cut segment ready to insert: the part of its line on the positive side of (or on) each of
+/// its walls. A rest-space segment has two walls, through its ends; a world-space cut triangle
+/// pulled back into one copy has up to three, its edges' walls pulled back through that copy's
+/// motion (what the triangle meets of the copy is the pre-image of its line bounded by them).
 struct PreparedSegment {
+  static constexpr int kMaxWalls = 3;
   PlaneId line = -1;
-  std::array<OrientedPlane, 2> walls;
+  std::array<OrientedPlane, kMaxWalls> walls;
+  int num_walls = 2;
   std::int64_t id = -1;  ///< numbering over all batches
+  /// Only faces of this label (a copy) are cut; -1: every face.
+  Index label = -1;
 };
 
 struct HalfEdge {
@@ -90,8 +96,8 @@ class TriangleArrangement {
   TriangleArrangement(std::array<VertexId, 3> corners, std::array<PlaneId, 3> side_lines,
                       std::array<Index, 3> side_edges, Index label);
 
-  /// Inserts a segment; returns whether any material was newly separated or bounded (a cell
-  /// split, or an edge newly covered). O(cells + their edges).
+  /// Inserts a segment into the faces it may cut (segment.label); returns whether any material
+  /// was newly separated or bounded (a cell split, or an edge newly covered). O(cells + their edges).
   bool insert(PlanarGeometry& geometry, const PreparedSegment& segment);
 
   const std::vector<Face>& faces() const { return faces_; }

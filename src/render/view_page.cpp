@@ -111,6 +111,8 @@ std::string page(const std::string& title, const std::vector<ViewFrame>& frames)
   if (frames.empty()) throw Error(ErrorKind::kInvalidArgument, "the viewer needs at least one frame");
   nlohmann::json data;
   data["title"] = title;
+  const bool triangles = std::any_of(frames.begin(), frames.end(), [](const ViewFrame& f) { return f.mesh_triangles; });
+  data["mesh_kind"] = triangles ? "triangles" : "tets";
   nlohmann::json& out_frames = data["frames"];
   out_frames = nlohmann::json::array();
   const ViewFrame* previous = nullptr;
@@ -181,6 +183,18 @@ ViewFrame mesh_frame(const TetMesh& mesh) {
   return frame;
 }
 
+// The edges of a mesh file to show over a surface: a tet mesh's, or a triangle surface's (a cloth's
+// triangle copies, as 'tetcut sim' and 'tetcut cut2d --copies' write them).
+ViewFrame edges_frame(const std::filesystem::path& path) {
+  if (file_kind(path) == FileKind::kTetMesh) return mesh_frame(read_tet_mesh(path));
+  ViewFrame frame;
+  const TriangleSurface copies = read_surface(path);
+  frame.mesh_points = copies.vertices;
+  frame.mesh_edges = triangle_edges(copies.triangles);
+  frame.mesh_triangles = true;
+  return frame;
+}
+
 }  // namespace
 
 std::vector<ViewFrame> load_frames(const std::filesystem::path& input, const std::filesystem::path& mesh) {
@@ -204,11 +218,20 @@ std::vector<ViewFrame> load_frames(const std::filesystem::path& input, const std
       }
     }
     Tets previous_tets;
+    Triangles previous_copies;
     for (std::size_t f = 0; f < surface_series.size(); ++f) {
       ViewFrame frame;
       frame.time = surface_series[f].time;
       frame.surface = read_surface(surface_series[f].file);
-      if (!mesh_series.empty()) {
+      if (!mesh_series.empty() && file_kind(mesh_series[f].file) == FileKind::kSurface) {
+        // A cloth scene's frame: its triangle copies, where they are.
+        const TriangleSurface copies = read_surface(mesh_series[f].file);
+        frame.mesh_points = copies.vertices;
+        const bool same = f > 0 && previous_copies.rows() == copies.triangles.rows() && previous_copies == copies.triangles;
+        frame.mesh_edges = same ? frames.back().mesh_edges : triangle_edges(copies.triangles);
+        frame.mesh_triangles = true;
+        previous_copies = copies.triangles;
+      } else if (!mesh_series.empty()) {
         const TetMesh tets = read_tet_mesh(mesh_series[f].file);
         frame.mesh_points = tets.rest();  // a sim frame's mesh file holds its current positions
         // The edges (an adjacency build) change only when a cut changes the tets.
@@ -226,10 +249,11 @@ std::vector<ViewFrame> load_frames(const std::filesystem::path& input, const std
     frames.push_back(std::move(frame));
   }
   if (!mesh.empty()) {
-    const ViewFrame edges = mesh_frame(read_tet_mesh(mesh));
+    const ViewFrame edges = edges_frame(mesh);
     for (ViewFrame& frame : frames) {
       frame.mesh_points = edges.mesh_points;
       frame.mesh_edges = edges.mesh_edges;
+      frame.mesh_triangles = edges.mesh_triangles;
     }
   }
   return frames;

@@ -22,123 +22,16 @@
 #include <numbers>
 #include <sstream>
 
+#include "scene/scene_internal.hpp"
 #include "util/stopwatch.hpp"
 
 namespace tetcut {
 namespace {
 
 using Json = nlohmann::json;
-
-// A JSON value and where it is in the file, for messages like "cuts[2].cylinder.radius: ...".
-class Value {
- public:
-  Value(const Json& json, std::string path, const std::string* file) : json_(&json), path_(std::move(path)), file_(file) {}
-
-  [[noreturn]] void fail(const std::string& why) const {
-    throw Error(ErrorKind::kInvalidInput, (path_.empty() ? std::string("the scene") : path_) + ": " + why, *file_);
-  }
-  const std::string& path() const { return path_; }
-
-  // Objects: the keys allowed; any other is an error (a typo must not be ignored).
-  void allow(std::initializer_list<const char*> keys) const {
-    if (!json_->is_object()) fail("must be an object");
-    for (const auto& [key, value] : json_->items()) {
-      if (std::find_if(keys.begin(), keys.end(), [&](const char* k) { return key == k; }) == keys.end()) {
-        std::string known;
-        for (const char* k : keys) known += std::string(known.empty() ? "" : ", ") + k;
-        fail("unknown key '" + key + "' (known: " + known + ")");
-      }
-    }
-  }
-  bool has(const char* key) const { return json_->is_object() && json_->contains(key); }
-  bool is_object() const { return json_->is_object(); }
-  Value at(const char* key) const {
-    if (!has(key)) fail(std::string("missing key '") + key + "'");
-    return Value((*json_)[key], join(key), file_);
-  }
-  std::optional<Value> get(const char* key) const {
-    if (!has(key)) return std::nullopt;
-    return Value((*json_)[key], join(key), file_);
-  }
-  std::vector<Value> array() const {
-    if (!json_->is_array()) fail("must be an array");
-    std::vector<Value> items;
-    for (std::size_t i = 0; i < json_->size(); ++i) items.emplace_back((*json_)[i], path_ + "[" + std::to_string(i) + "]", file_);
-    return items;
-  }
-
-  double number() const {
-    if (!json_->is_number()) fail("must be a number");
-    const double x = json_->get<double>();
-    if (!std::isfinite(x)) fail("must be finite");
-    return x;
-  }
-  double positive() const {
-    const double x = number();
-    if (!(x > 0)) fail("must be positive");
-    return x;
-  }
-  double non_negative() const {
-    const double x = number();
-    if (x < 0) fail("must not be negative");
-    return x;
-  }
-  int integer(int lowest) const {
-    if (!json_->is_number_integer()) fail("must be an integer");
-    const auto x = json_->get<std::int64_t>();
-    if (x < lowest || x > 1'000'000'000) fail("must be an integer from " + std::to_string(lowest));
-    return static_cast<int>(x);
-  }
-  bool boolean() const {
-    if (!json_->is_boolean()) fail("must be true or false");
-    return json_->get<bool>();
-  }
-  std::string string() const {
-    if (!json_->is_string()) fail("must be a string");
-    return json_->get<std::string>();
-  }
-  std::string choice(std::initializer_list<const char*> options) const {
-    const std::string s = string();
-    std::string known;
-    for (const char* o : options) {
-      if (s == o) return s;
-      known += std::string(known.empty() ? "" : ", ") + o;
-    }
-    fail("'" + s + "' is not one of " + known);
-  }
-  std::vector<double> numbers(std::size_t count) const {
-    if (!json_->is_array() || json_->size() != count) fail("must be an array of " + std::to_string(count) + " numbers");
-    std::vector<double> out;
-    for (const Value& v : array()) out.push_back(v.number());
-    return out;
-  }
-  Vec3 vec3() const {
-    const auto v = numbers(3);
-    return Vec3(v[0], v[1], v[2]);
-  }
-  Vec3 direction() const {
-    const Vec3 v = vec3();
-    if (!(v.norm() > 0)) fail("must not be the zero vector");
-    return v;
-  }
-  Box box() const {
-    const auto v = numbers(6);
-    Box b{Vec3(v[0], v[1], v[2]), Vec3(v[3], v[4], v[5])};
-    if (!((b.min.array() <= b.max.array()).all())) fail("its minimum corner must not exceed its maximum corner");
-    return b;
-  }
-
- private:
-  std::string join(const char* key) const { return path_.empty() ? key : path_ + "." + key; }
-  const Json* json_;
-  std::string path_;
-  const std::string* file_;
-};
-
-std::filesystem::path relative_to(const std::filesystem::path& scene, const std::string& path) {
-  const std::filesystem::path p(path);
-  return p.is_absolute() ? p : scene.parent_path() / p;
-}
+using scene::percentile;
+using scene::relative_to;
+using scene::Value;
 
 TetMesh load_mesh(const Value& mesh, const std::filesystem::path& source) {
   mesh.allow({"file", "grid", "bcc", "tet"});
@@ -199,13 +92,7 @@ SceneCut load_cut(const Value& cut, const std::filesystem::path& source) {
   } else if (const auto blade = cut.get("blade")) {
     blade->allow({"poses"});
     c.description = "blade";
-    std::vector<BladePose> poses;
-    for (const Value& pose : blade->at("poses").array()) {
-      const auto ab = pose.numbers(6);
-      poses.push_back({Vec3(ab[0], ab[1], ab[2]), Vec3(ab[3], ab[4], ab[5])});
-    }
-    if (poses.size() < 2) blade->at("poses").fail("needs at least 2 poses");
-    c.triangles = swept_blade(poses);
+    c.triangles = swept_blade(blade->at("poses").poses());
   } else {
     const Value cookie = cut.at("cookie_cutter");
     cookie.allow({"profile", "origin", "u", "v", "depth"});
@@ -232,9 +119,8 @@ SessionEvent load_event(const Value& e) {
   if (kinds != 1) e.fail("give exactly one of 'blade', 'lift_blade', 'grab', 'move_hook', 'release', 'pin' or 'unpin'");
   if (e.has("stiffness") && !e.has("grab")) e.at("stiffness").fail("goes with 'grab'");
   if (const auto blade = e.get("blade")) {
-    const auto ab = blade->numbers(6);
     event.kind = SessionEvent::Kind::kBlade;
-    event.pose = {Vec3(ab[0], ab[1], ab[2]), Vec3(ab[3], ab[4], ab[5])};
+    event.pose = blade->pose();
   } else if (const auto lift = e.get("lift_blade")) {
     if (!lift->boolean()) lift->fail("must be true");
     event.kind = SessionEvent::Kind::kLiftBlade;
@@ -290,6 +176,111 @@ Json event_json(const SessionEvent& e) {
 
 }  // namespace
 
+namespace scene {
+
+// The largest picture side a scene may ask for: what `tetcut render --size` allows too.
+constexpr int kMaxPictureSide = 16384;
+
+std::vector<Box> load_pins(const Value& root) {
+  std::vector<Box> pins;
+  if (const auto list = root.get("pin")) {
+    for (const Value& pin : list->array()) {
+      pin.allow({"box"});
+      pins.push_back(pin.at("box").box());
+    }
+  }
+  return pins;
+}
+
+void load_output(const Value& root, Scene* scene) {
+  if (const auto output = root.get("output")) {
+    output->allow({"mesh", "surface", "picture"});
+    if (const auto v = output->get("mesh")) scene->write_mesh = v->boolean();
+    if (const auto v = output->get("surface")) scene->write_surface = v->boolean();
+    if (const auto picture = output->get("picture")) {
+      picture->allow({"box", "azimuth", "elevation", "zoom", "size"});
+      if (const auto v = picture->get("box")) scene->picture_box = v->box();
+      if (const auto v = picture->get("azimuth")) scene->picture_azimuth = v->number();
+      if (const auto v = picture->get("elevation")) scene->picture_elevation = v->number();
+      if (const auto v = picture->get("zoom")) scene->picture_zoom = v->positive();
+      if (const auto v = picture->get("size")) {
+        const std::vector<Value> size = v->array();
+        if (size.size() != 2) v->fail("must be [width, height] in pixels");
+        scene->picture_width = size[0].integer(1);
+        scene->picture_height = size[1].integer(1);
+        if (scene->picture_width > kMaxPictureSide || scene->picture_height > kMaxPictureSide) {
+          v->fail("must be at most " + std::to_string(kMaxPictureSide) + " pixels a side");
+        }
+      }
+    }
+  }
+}
+
+namespace {
+// The .pvd series of one kind of output, listing frames 0 .. times.size() - 1.
+void write_frame_series(const std::filesystem::path& path, const std::string& prefix, const std::string& extension,
+                        const std::vector<double>& times) {
+  std::vector<SeriesEntry> entries;
+  for (std::size_t f = 0; f < times.size(); ++f) {
+    char name[64];
+    std::snprintf(name, sizeof name, "%s_%04zu%s", prefix.c_str(), f, extension.c_str());
+    entries.push_back({times[f], name});
+  }
+  write_series(path, entries);
+}
+}  // namespace
+
+FrameSeries::FrameSeries(const Scene& scene, double dt, std::filesystem::path directory, const SceneRunOptions& options,
+                         std::string mesh_extension)
+    : scene_(scene), dt_(dt), directory_(std::move(directory)), options_(options), mesh_extension_(std::move(mesh_extension)) {
+  steps_ = std::max(1, static_cast<int>(std::llround(scene.duration / dt)));
+  every_ = scene.output_every > 0 ? std::max(1, static_cast<int>(std::llround(scene.output_every / dt))) : 1;
+  expected_ = steps_ / every_;
+}
+
+void FrameSeries::written(double time, Clock::time_point start, SceneSummary* summary) {
+  const int frame = next();
+  times_.push_back(time);
+  if (scene_.write_mesh) write_frame_series(directory_ / "mesh.pvd", "mesh", mesh_extension_, times_);
+  if (scene_.write_surface) write_frame_series(directory_ / "surface.pvd", "surface", ".vtp", times_);
+  summary->stage_seconds.output += seconds_since(start);
+  if (options_.progress) options_.progress(frame, expected_);
+}
+
+void FrameSeries::finish(const std::vector<double>& step_ms, const Points& nodes, Clock::time_point start,
+                         SceneSummary* summary) const {
+  SceneSummary& s = *summary;
+  s.frames = next();
+  s.simulated_seconds = s.steps * dt_;
+  s.wall_seconds = seconds_since(start);
+  s.seconds_per_frame = s.frames > 1 ? s.wall_seconds / (s.frames - 1) : s.wall_seconds;
+  s.step_ms_median = percentile(step_ms, 0.5);
+  s.step_ms_p99 = percentile(step_ms, 0.99);
+  s.step_ms_max = step_ms.empty() ? 0 : *std::max_element(step_ms.begin(), step_ms.end());
+  s.final_box = {nodes.colwise().minCoeff().transpose(), nodes.colwise().maxCoeff().transpose()};
+}
+
+double percentile(std::vector<double> v, double p) {
+  if (v.empty()) return 0;
+  std::sort(v.begin(), v.end());
+  return v[std::min(v.size() - 1, static_cast<std::size_t>(p * static_cast<double>(v.size() - 1) + 0.5))];
+}
+
+Json ms_per_step_json(const SceneSummary& s) {
+  const double per_step = s.steps > 0 ? 1e3 / s.steps : 0;
+  const SceneStageSeconds& t = s.stage_seconds;
+  return {{"cut", t.cut * per_step},
+          {"surface", t.surface * per_step},
+          {"remesh", t.remesh * per_step},
+          {"step", t.step * per_step},
+          {"total", (t.cut + t.surface + t.remesh + t.step) * per_step},
+          {"median", s.step_ms_median},
+          {"p99", s.step_ms_p99},
+          {"max", s.step_ms_max}};
+}
+
+}  // namespace scene
+
 Scene load_scene(const std::filesystem::path& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw Error(ErrorKind::kIo, "cannot open the scene file", path.string());
@@ -309,10 +300,14 @@ Scene parse_scene(std::string_view text, const std::filesystem::path& path) {
   const std::string file = path.string();
   const Value root(json, "", &file);
   root.allow({"mesh", "embed", "material", "gravity", "time", "solver", "pin", "move", "obstacles", "contact_stiffness",
-              "self_collision", "cuts", "scalpels", "transforms", "springs", "events", "output"});
+              "self_collision", "cuts", "scalpels", "transforms", "springs", "events", "output", "cloth"});
   Scene scene;
   scene.source = path;
   scene.json = json.dump();
+  if (root.has("cloth")) {
+    scene::load_cloth(root, path, &scene);
+    return scene;
+  }
 
   const auto embed = root.get("embed");
   if (embed) {
@@ -375,12 +370,7 @@ Scene parse_scene(std::string_view text, const std::filesystem::path& path) {
       scene.step.solver = v->choice({"cg", "cholesky"}) == "cg" ? sim::LinearSolver::kConjugateGradient : sim::LinearSolver::kCholesky;
     }
   }
-  if (const auto pins = root.get("pin")) {
-    for (const Value& pin : pins->array()) {
-      pin.allow({"box"});
-      scene.pins.push_back(pin.at("box").box());
-    }
-  }
+  scene.pins = scene::load_pins(root);
   if (const auto moves = root.get("move")) {
     for (const Value& move : moves->array()) {
       move.allow({"box", "velocity", "from", "until"});
@@ -438,11 +428,7 @@ Scene parse_scene(std::string_view text, const std::filesystem::path& path) {
       scalpel.until = blade.at("until").non_negative();
       if (!(scalpel.until > scalpel.from)) blade.at("until").fail("must come after 'from'");
       if (const auto space = blade.get("space")) scalpel.world_space = space->choice({"rest", "world"}) == "world";
-      for (const Value& pose : blade.at("poses").array()) {
-        const auto ab = pose.numbers(6);
-        scalpel.poses.push_back({Vec3(ab[0], ab[1], ab[2]), Vec3(ab[3], ab[4], ab[5])});
-      }
-      if (scalpel.poses.size() < 2) blade.at("poses").fail("needs at least 2 poses");
+      scalpel.poses = blade.at("poses").poses();
       scene.scalpels.push_back(std::move(scalpel));
     }
   }
@@ -483,17 +469,7 @@ Scene parse_scene(std::string_view text, const std::filesystem::path& path) {
     for (const Value& e : events->array()) scene.events.push_back(load_event(e));
     std::stable_sort(scene.events.begin(), scene.events.end(), [](const SessionEvent& a, const SessionEvent& b) { return a.time < b.time; });
   }
-  if (const auto output = root.get("output")) {
-    output->allow({"mesh", "surface", "picture"});
-    if (const auto v = output->get("mesh")) scene.write_mesh = v->boolean();
-    if (const auto v = output->get("surface")) scene.write_surface = v->boolean();
-    if (const auto picture = output->get("picture")) {
-      picture->allow({"box", "azimuth", "elevation"});
-      if (const auto v = picture->get("box")) scene.picture_box = v->box();
-      if (const auto v = picture->get("azimuth")) scene.picture_azimuth = v->number();
-      if (const auto v = picture->get("elevation")) scene.picture_elevation = v->number();
-    }
-  }
+  scene::load_output(root, &scene);
   return scene;
 }
 
@@ -507,29 +483,11 @@ BladePose SceneScalpel::at(double t) const {
 
 namespace {
 
-// The .pvd series of one kind of output, listing frames 0 .. times.size() - 1.
-void write_frame_series(const std::filesystem::path& path, const std::string& prefix, const std::string& extension,
-                        const std::vector<double>& times) {
-  std::vector<SeriesEntry> entries;
-  for (std::size_t f = 0; f < times.size(); ++f) {
-    char name[64];
-    std::snprintf(name, sizeof name, "%s_%04zu%s", prefix.c_str(), f, extension.c_str());
-    entries.push_back({times[f], name});
-  }
-  write_series(path, entries);
-}
-
-double percentile(std::vector<double> v, double p) {
-  if (v.empty()) return 0;
-  std::sort(v.begin(), v.end());
-  return v[std::min(v.size() - 1, static_cast<std::size_t>(p * static_cast<double>(v.size() - 1) + 0.5))];
-}
-
 // A run of a scene: a Session advanced step by step, its frames written as the scene asks.
 class SceneRunner {
  public:
   SceneRunner(const Scene& scene, const std::filesystem::path& directory, const SceneRunOptions& options)
-      : scene_(scene), directory_(directory), options_(options), session_(scene) {
+      : scene_(scene), directory_(directory), options_(options), session_(scene), frames_(scene, scene.step.dt, directory, options, ".vtu") {
     mesh_fields_.current_positions = true;
   }
 
@@ -537,14 +495,11 @@ class SceneRunner {
     const auto start_time = Clock::now();
     std::filesystem::create_directories(directory_);
     const double dt = scene_.step.dt;
-    const int steps = std::max(1, static_cast<int>(std::llround(scene_.duration / dt)));
-    const int every = scene_.output_every > 0 ? std::max(1, static_cast<int>(std::llround(scene_.output_every / dt))) : 1;
-    expected_frames_ = steps / every;
     write_frame(0);
     std::vector<double> step_ms;
     double newton_total = 0, cg_total = 0;
     SceneStageSeconds& t = summary_.stage_seconds;
-    for (int s = 0; s < steps; ++s) {
+    for (int s = 0; s < frames_.steps(); ++s) {
       const SessionStep step = session_.advance();
       t.cut += step.seconds.cut;
       t.surface += step.seconds.surface;
@@ -559,13 +514,12 @@ class SceneRunner {
       summary_.contact_limited_steps += step.report.contact_limited_steps;
       summary_.contact_seconds += step.report.contact_seconds;
       ++summary_.steps;
-      if ((s + 1) % every == 0) {
+      if (frames_.frame_after(s)) {
         write_frame((s + 1) * dt);
-        if (options_.max_frames >= 0 && static_cast<int>(times_.size()) - 1 >= options_.max_frames) break;
+        if (frames_.enough()) break;
       }
     }
     const CutResult& r = session_.result();
-    summary_.frames = static_cast<int>(times_.size());
     summary_.cuts_applied = session_.cuts_applied();
     summary_.springs = session_.num_incision_springs();
     summary_.spring_gap_when_attached = session_.incision_gap_when_attached();
@@ -573,16 +527,9 @@ class SceneRunner {
     summary_.tets = r.mesh.mesh.num_tets();
     summary_.nodes = r.mesh.mesh.num_nodes();
     summary_.pieces = r.mesh.num_pieces();
-    summary_.simulated_seconds = summary_.steps * dt;
-    summary_.wall_seconds = seconds_since(start_time);
-    summary_.seconds_per_frame = summary_.frames > 1 ? summary_.wall_seconds / (summary_.frames - 1) : summary_.wall_seconds;
     summary_.mean_newton_iterations = summary_.steps > 0 ? newton_total / summary_.steps : 0;
     summary_.mean_cg_iterations = summary_.steps > 0 ? cg_total / summary_.steps : 0;
-    summary_.step_ms_median = percentile(step_ms, 0.5);
-    summary_.step_ms_p99 = percentile(step_ms, 0.99);
-    summary_.step_ms_max = step_ms.empty() ? 0 : *std::max_element(step_ms.begin(), step_ms.end());
-    const Points& x = session_.simulator().positions();
-    summary_.final_box = {x.colwise().minCoeff().transpose(), x.colwise().maxCoeff().transpose()};
+    frames_.finish(step_ms, session_.simulator().positions(), start_time, &summary_);
     write_summary();
     return summary_;
   }
@@ -590,7 +537,7 @@ class SceneRunner {
  private:
   void write_frame(double time) {
     const auto start = Clock::now();
-    const int frame = static_cast<int>(times_.size());
+    const int frame = frames_.next();
     char name[64];
     if (scene_.write_mesh) {
       CutResult& r = session_.result();
@@ -625,13 +572,13 @@ class SceneRunner {
       moved.vertices = session_.surface_positions();
       std::snprintf(name, sizeof name, "surface_%04d.vtp", frame);
       if (scene_.write_surface) write_surface(directory_ / name, moved);
-      if (options_.frame_surface) options_.frame_surface(frame, moved);
+      if (options_.frame_surface) {
+        SceneFrame shown;
+        shown.surface = std::move(moved);
+        options_.frame_surface(frame, shown);
+      }
     }
-    times_.push_back(time);
-    if (scene_.write_mesh) write_frame_series(directory_ / "mesh.pvd", "mesh", ".vtu", times_);
-    if (scene_.write_surface) write_frame_series(directory_ / "surface.pvd", "surface", ".vtp", times_);
-    summary_.stage_seconds.output += seconds_since(start);
-    if (options_.progress) options_.progress(frame, expected_frames_);
+    frames_.written(time, start, &summary_);
   }
 
   void write_summary() const {
@@ -652,15 +599,7 @@ class SceneRunner {
                     {"mean_cg_iterations", s.mean_cg_iterations},
                     {"unconverged_steps", s.unconverged_steps},
                     {"max_residual", s.max_residual},
-                    {"ms_per_step",
-                     {{"cut", t.cut * per_step},
-                      {"surface", t.surface * per_step},
-                      {"remesh", t.remesh * per_step},
-                      {"step", t.step * per_step},
-                      {"total", (t.cut + t.surface + t.remesh + t.step) * per_step},
-                      {"median", s.step_ms_median},
-                      {"p99", s.step_ms_p99},
-                      {"max", s.step_ms_max}}},
+                    {"ms_per_step", scene::ms_per_step_json(s)},
                     {"output_seconds", t.output},
                     {"final_box", {s.final_box.min[0], s.final_box.min[1], s.final_box.min[2], s.final_box.max[0], s.final_box.max[1], s.final_box.max[2]}},
                     {"springs", s.springs},
@@ -685,14 +624,14 @@ class SceneRunner {
   Session session_;
   TetMeshWriteOptions mesh_fields_;
   int fields_for_cut_ = -1;
-  std::vector<double> times_;
-  int expected_frames_ = 0;
+  scene::FrameSeries frames_;
   SceneSummary summary_;
 };
 
 }  // namespace
 
 SceneSummary run_scene(const Scene& scene, const std::filesystem::path& directory, const SceneRunOptions& options) {
+  if (scene.cloth) return scene::run_cloth_scene(scene, directory, options);
   return SceneRunner(scene, directory, options).run();
 }
 

@@ -339,7 +339,18 @@ struct Session::State {
   SceneStageSeconds pending;  // stages since the last step
 };
 
-Session::Session(const Scene& scene) : state_(std::make_unique<State>(scene)) {}
+namespace {
+// The live session runs tet scenes; a cloth scene is refused before anything is built.
+const Scene& tet_scene(const Scene& scene) {
+  if (scene.cloth) {
+    throw Error(ErrorKind::kInvalidInput, "a cloth scene runs in tetcut sim; the live session takes tet meshes",
+                scene.source.string());
+  }
+  return scene;
+}
+}  // namespace
+
+Session::Session(const Scene& scene) : state_(std::make_unique<State>(tet_scene(scene))) {}
 Session::~Session() = default;
 Session::Session(Session&&) noexcept = default;
 Session& Session::operator=(Session&&) noexcept = default;

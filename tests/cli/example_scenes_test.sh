@@ -22,3 +22,15 @@ assert worst <= 1e-3 * diagonal, ("final box", box, expected, worst / diagonal)
 print(sys.argv[2], "final box within", worst / diagonal, "of its diagonal")
 PY
 done
+
+# The cloth scenes. Figure 1's spiral is cut in rest space, so its copies do not depend on the
+# simulation: 281 copies over 234 nodes, one ribbon (as examples/cloth_spiral.cpp makes them), its
+# area the square's; the ribbon hangs about 3.2 m below the pins. The blade cuts the cloth where it
+# has swung to, taking the bottom off in one piece, which falls.
+expect_exit 0 "$TETCUT" sim "$EXAMPLES/fig1-cloth-spiral.json" -o fig1
+json_check fig1/summary.json 'j["cloth"] and j["triangles_in"] == 128 and j["triangle_copies"] == 281 and j["nodes"] == 234'
+json_check fig1/summary.json 'j["pieces"] == 1 and abs(j["piece_areas"][0] - 1) < 1e-12 and j["steps"] == 600 and j["frames"] == 151'
+json_check fig1/summary.json '-3.5 < j["final_box"][2] < -2.9 and j["final_box"][5] == 1'
+expect_exit 0 "$TETCUT" sim "$EXAMPLES/cloth-blade.json" -o blade
+json_check blade/summary.json 'j["pieces"] == 2 and abs(sum(j["piece_areas"]) - 1) < 1e-12 and j["triangle_copies"] > 128'
+json_check blade/summary.json 'j["cuts_applied"] == 2 and j["skipped_coplanar"] == 0 and j["final_box"][2] < -3 and j["final_box"][5] == 1'

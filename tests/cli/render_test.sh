@@ -14,7 +14,35 @@ expect_exit 0 "$TETCUT" render cut.obj -o pieces.png --pieces --size 320 200 --a
 expect_exit 0 "$TETCUT" render cut.obj -o wire.png --wireframe cube.vtu --size 320 200
 expect_exit 0 "$TETCUT" render cube.vtu -o mesh.png --wireframe --zoom 1.5
 expect_stdout "edges"
-"$PYTHON" - pieces.png wire.png mesh.png <<'PY'
+# Cut cloth: what tetcut cut2d writes (the material, pieces coloured, its triangle copies over it),
+# and a cloth scene's frames (the last one, or the one asked for, with its copies).
+printf 'v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0.5 0.5 0\nf 1 2 5\nf 2 3 5\nf 3 4 5\nf 4 1 5\n' > square.obj
+printf 'v -1 0.3 0\nv 2 0.6 0\nl 1 2\n' > across.obj
+expect_exit 0 "$TETCUT" cut2d square.obj across.obj -o material.vtp --copies copies.obj
+expect_exit 0 "$TETCUT" render material.vtp -o cloth_cut.png --pieces --wireframe copies.obj --size 320 200 --elevation 90
+expect_stdout "edges"
+cat > cloth.json <<'JSON'
+{"cloth": {"mesh": {"grid": {"cells": 4, "size": 1, "plane": "xz"}}},
+ "pin": [{"box": [-1, -1, 0.99, 2, 1, 1.01]}],
+ "time": {"dt": 0.01, "duration": 0.1, "output_every": 0.05},
+ "cuts": [{"time": 0, "blade": {"poses": [[-1, -1, 0.4375, -1, 1, 0.4375], [2, -1, 0.4375, 2, 1, 0.4375]]}}],
+ "output": {"picture": {"azimuth": -90, "elevation": 0, "zoom": 1.2, "size": [320, 240]}}}
+JSON
+expect_exit 0 "$TETCUT" sim cloth.json -o cloth --png
+"$PYTHON" -c "import struct,sys; d=open(sys.argv[1],'rb').read(); assert struct.unpack('>II', d[16:24])==(320, 240)" \
+  cloth/frame_0002.png || fail "the cloth's pictures are not the scene's size"
+expect_exit 0 "$TETCUT" render cloth -o cloth_last.png --wireframe --pieces --azimuth -90 --elevation 0 --size 320 200
+expect_stdout "surface_0002.vtp"
+expect_stdout "edges"
+expect_exit 0 "$TETCUT" render cloth -o cloth_plain.png --pieces --azimuth -90 --elevation 0 --size 320 200
+cmp -s cloth_last.png cloth_plain.png && fail "the triangle copies are not drawn"
+expect_exit 0 "$TETCUT" render cloth -o cloth_first.png --frame 0 --wireframe
+expect_stdout "surface_0000.vtp"
+expect_exit 2 "$TETCUT" render cloth -o x.png --frame 7
+expect_stderr "the series has frames 0 to 2"
+expect_exit 2 "$TETCUT" render material.vtp -o x.png --frame 1
+expect_stderr "--frame goes with a directory"
+"$PYTHON" - pieces.png wire.png mesh.png cloth_cut.png cloth_last.png <<'PY'
 import struct, sys, zlib
 def png(path):
     data = open(path, "rb").read()
@@ -45,6 +73,8 @@ def png(path):
 w, h, covered = png(sys.argv[1]); assert (w, h) == (320, 200) and covered > 0.1, (w, h, covered)
 w, h, covered = png(sys.argv[2]); assert (w, h) == (320, 200) and covered > 0.1
 w, h, covered = png(sys.argv[3]); assert (w, h) == (800, 600) and covered > 0.1
+w, h, covered = png(sys.argv[4]); assert (w, h) == (320, 200) and covered > 0.1, covered
+w, h, covered = png(sys.argv[5]); assert (w, h) == (320, 200) and covered > 0.05, covered
 PY
 # tetcut sim --png renders each output frame with a camera that holds still.
 cat > drop.json <<'JSON'

@@ -72,6 +72,37 @@ json_check short/summary.json 'j["frames"] == 3 and j["steps"] == 10'
 
 # (Every example scene runs its first frames, into pictures and an animation, in render_test.sh.)
 
+# A cloth scene: a hanging square cut across by a blade in world space before it moves, so exactly
+# where a rest-space cut at z = 7/16 would: 8 triangles split, pieces of 9/16 and 7/16; the lower
+# one falls. Its frames are the triangle copies and the material, as surfaces.
+cat > cloth.json <<'JSON'
+{"cloth": {"mesh": {"grid": {"cells": 4, "size": 1, "plane": "xz"}}, "material": {"stretch_stiffness": 2000, "mass_damping": 1}},
+ "pin": [{"box": [-1, -1, 0.99, 2, 1, 1.01]}],
+ "time": {"dt": 0.01, "duration": 0.2, "output_every": 0.05},
+ "cuts": [{"time": 0, "blade": {"poses": [[-1, -1, 0.4375, -1, 1, 0.4375], [2, -1, 0.4375, 2, 1, 0.4375]]}}]}
+JSON
+expect_exit 0 "$TETCUT" sim cloth.json -o cloth
+expect_stdout "cloth            40 triangle copies of 32 triangles, 35 nodes, 2 pieces"
+for f in 0 1 2 3 4; do
+  [[ -s cloth/mesh_000$f.vtp && -s cloth/surface_000$f.vtp ]] || fail "cloth frame $f is missing"
+done
+grep -q 'file="mesh_0004.vtp"' cloth/mesh.pvd || fail "the cloth's mesh series lacks its last frame"
+json_check cloth/summary.json 'j["cloth"] and j["frames"] == 5 and j["steps"] == 20 and j["cuts_applied"] == 1'
+json_check cloth/summary.json 'j["triangles_in"] == 32 and j["triangle_copies"] == 40 and j["nodes"] == 35 and j["pieces"] == 2'
+json_check cloth/summary.json 'abs(j["piece_areas"][0] - 0.5625) < 1e-12 and abs(j["piece_areas"][1] - 0.4375) < 1e-12'
+json_check cloth/summary.json 'all(j["ms_per_step"][k] >= 0 for k in ("cut", "surface", "remesh", "step", "total", "median", "p99", "max"))'
+json_check cloth/summary.json 'j["unconverged_steps"] == 0 and j["final_box"][2] < -0.1 and j["final_box"][5] == 1'
+expect_exit 0 "$TETCUT" info --json cloth/mesh_0004.vtp
+json_check out.txt 'j["triangles"] == 40'
+# What a cloth scene has not is refused by name; --check-intersections is for tets; nothing is written.
+sed 's/"pin"/"obstacles": [], "pin"/' cloth.json > bad_cloth.json
+expect_exit 2 "$TETCUT" sim bad_cloth.json -o bad_cloth
+expect_stderr "obstacles: not in a cloth scene"
+[[ ! -e bad_cloth ]] || fail "a rejected cloth scene created its output directory"
+expect_exit 2 "$TETCUT" sim cloth.json -o cloth_checked --check-intersections
+expect_stderr "cloth scene"
+[[ ! -e cloth_checked ]] || fail "a refused run created its output directory"
+
 # Bad scenes: the file and the key are named, nothing is written.
 sed 's/"density": 100/"densty": 100/' drop.json > typo.json
 expect_exit 2 "$TETCUT" sim typo.json -o typo_out

@@ -54,6 +54,39 @@ grep -qF "<title>two halves - tetcut</title>" cut.html || fail "the title is not
 expect_exit 0 "$TETCUT" view cut.vtu -o mesh_page.html
 [[ -s mesh_page.html ]] || fail "no page for a mesh file"
 
+# A cloth scene's frames, with the edges of its triangle copies where they are; and the material
+# tetcut cut2d writes, with its copies.
+cat > cloth.json <<'JSON'
+{"cloth": {"mesh": {"grid": {"cells": 4, "size": 1, "plane": "xz"}}},
+ "pin": [{"box": [-1, -1, 0.99, 2, 1, 1.01]}],
+ "time": {"dt": 0.01, "duration": 0.1, "output_every": 0.05},
+ "cuts": [{"time": 0, "blade": {"poses": [[-1, -1, 0.4375, -1, 1, 0.4375], [2, -1, 0.4375, 2, 1, 0.4375]]}}]}
+JSON
+expect_exit 0 "$TETCUT" sim cloth.json -o cloth
+expect_exit 0 "$TETCUT" view cloth
+expect_stdout "cloth/view.html (3 frames, with triangle-copy edges"
+"$PYTHON" - cloth/view.html cloth/summary.json <<'PY'
+import base64, json, re, sys
+html = open(sys.argv[1]).read()
+summary = json.load(open(sys.argv[2]))
+data = json.loads(re.search(r'<script id="tetcut-data" type="application/json">(.*?)</script>', html, re.S).group(1))
+assert data["mesh_kind"] == "triangles", data["mesh_kind"]
+frames = data["frames"]
+assert len(frames) == 3
+# One point per node; edges stored when the copies change: frame 0 is the uncut grid (its 56
+# edges), frame 1 has the copies the blade made (more edges, over the doubled nodes), frame 2 the same.
+nodes = len(base64.b64decode(frames[2]["mesh"]["positions"]["q"])) // 6
+assert nodes == summary["nodes"] == 35, nodes
+edges = [len(base64.b64decode(f["mesh"]["edges"])) // 8 if f["mesh"]["edges"] else None for f in frames]
+assert edges[0] == 56 and edges[1] > 56 and edges[2] is None, edges
+assert frames[0]["surface"]["pieces"] == 1 and frames[2]["surface"]["pieces"] == 2
+PY
+printf 'v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0.5 0.5 0\nf 1 2 5\nf 2 3 5\nf 3 4 5\nf 4 1 5\n' > square.obj
+printf 'v -1 0.3 0\nv 2 0.6 0\nl 1 2\n' > across.obj
+expect_exit 0 "$TETCUT" cut2d square.obj across.obj -o material.vtp --copies copies.obj
+expect_exit 0 "$TETCUT" view material.vtp --mesh copies.obj
+expect_stdout "material.html (1 frame, with triangle-copy edges"
+
 # Errors name the file and leave nothing behind.
 expect_exit 2 "$TETCUT" view missing_dir
 expect_stderr "missing_dir: no such file or directory"

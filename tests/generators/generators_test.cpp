@@ -1,11 +1,14 @@
 // Generators: exact volume, positive tets, conforming faces, boundary exactly on the box.
 
+#include <tetcut/cutting_surfaces.hpp>
 #include <tetcut/error.hpp>
 #include <tetcut/generators.hpp>
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <numbers>
 #include <tuple>
 
 #include "support/invariants.hpp"
@@ -85,6 +88,29 @@ TEST(Bcc, RejectsBadSpacing) {
   EXPECT_THROW(make_bcc(Box{}, 0), Error);
   EXPECT_THROW(make_bcc(Box{}, -1), Error);
   EXPECT_THROW(make_bcc(Box{}, 1e-6), Error);
+}
+
+TEST(Spiral, TurnsInwardsClockwiseFromBelowTheCentreInSteps) {
+  const Eigen::Vector2d centre(0.5, 0.5);
+  const Points2 p = spiral(centre, 0.4, 0.1, 0.1, 0.01);
+  ASSERT_GT(p.rows(), 100);
+  EXPECT_NEAR(p(0, 0), 0.5, 1e-15);  // straight below the centre, at the outer radius
+  EXPECT_NEAR(p(0, 1), 0.1, 1e-15);
+  double previous_radius = 0.4, turned = 0;
+  for (Index i = 1; i < p.rows(); ++i) {
+    const Eigen::Vector2d a = p.row(i - 1).transpose() - centre, b = p.row(i).transpose() - centre;
+    EXPECT_NEAR((b - a).norm(), 0.01, 1e-3) << "point " << i;        // about a step apart
+    EXPECT_LT(a.x() * b.y() - a.y() * b.x(), 0) << "point " << i;     // clockwise
+    EXPECT_LT(b.norm(), previous_radius) << "point " << i;            // inwards
+    EXPECT_GE(b.norm(), 0.1) << "point " << i;                        // not past the inner radius
+    previous_radius = b.norm();
+    turned += std::acos(std::clamp(a.dot(b) / (a.norm() * b.norm()), -1.0, 1.0));
+  }
+  // Three turns from radius 0.4 to 0.1 at 0.1 a turn, less the last step.
+  EXPECT_NEAR(turned / (2 * std::numbers::pi), 3, 0.02);
+  EXPECT_THROW(spiral(centre, 0.4, 0.5, 0.1, 0.01), Error);
+  EXPECT_THROW(spiral(centre, 0.4, 0.1, 0, 0.01), Error);
+  EXPECT_THROW(spiral(centre, 1e3, 0, 1e-6, 1e-6), Error);  // far too many points
 }
 
 }  // namespace

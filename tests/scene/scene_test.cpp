@@ -61,8 +61,8 @@ TEST(Scene, ErrorsNameTheKey) {
   EXPECT_NE(load_error(std::string("{") + kCube + "," + time + R"(, "material": {"model": "jelly"}})")
                 .find("'jelly' is not one of stable_neo_hookean, corotated"),
             std::string::npos);
-  EXPECT_NE(load_error(std::string("{") + kCube + "," + time + R"(, "output": {"picture": {"zoom": 2}}})")
-                .find("output.picture: unknown key 'zoom'"),
+  EXPECT_NE(load_error(std::string("{") + kCube + "," + time + R"(, "output": {"picture": {"fov": 2}}})")
+                .find("output.picture: unknown key 'fov'"),
             std::string::npos);
   EXPECT_NE(load_error(std::string("{") + kCube + "," + time + R"(, "obstacles": [{"plane": {"point": [0,0,0], "normal": [0,0,1]}, "friction": -1}]})")
                 .find("obstacles[0].friction: must not be negative"),
@@ -93,6 +93,19 @@ TEST(Scene, PictureCameraIsRead) {
   EXPECT_EQ(scene.picture_box->max, Vec3(1, 2, 3));
   EXPECT_EQ(scene.picture_elevation, 5);
   EXPECT_EQ(scene.picture_azimuth, 35);
+  EXPECT_EQ(scene.picture_zoom, 1);
+  EXPECT_EQ(scene.picture_width, 640);
+  const Scene sized = load_scene(write_scene(
+      dir.path(), std::string("{") + kCube + R"(, "time": {"duration": 0.1}, "output": {"picture": {"zoom": 1.5, "size": [300, 900]}}})"));
+  EXPECT_EQ(sized.picture_zoom, 1.5);
+  EXPECT_EQ(sized.picture_width, 300);
+  EXPECT_EQ(sized.picture_height, 900);
+  EXPECT_NE(load_error(std::string("{") + kCube + R"(, "time": {"duration": 0.1}, "output": {"picture": {"size": [300, 20000]}}})")
+                .find("output.picture.size: must be at most 16384"),
+            std::string::npos);
+  EXPECT_NE(load_error(std::string("{") + kCube + R"(, "time": {"duration": 0.1}, "output": {"picture": {"size": [300]}}})")
+                .find("output.picture.size: must be [width, height]"),
+            std::string::npos);
 }
 
 TEST(Scene, CutInFlightThenBothPiecesLandOnTheGround) {

@@ -1,6 +1,6 @@
 // The tetcut viewer: one self-contained page written by `tetcut view`. The data (frames of a
-// material surface, each with its vertices' piece colours and optionally the embedding tet mesh's
-// edges) sits in the page as JSON with base64 arrays, so the page works offline from file://.
+// material surface, each with its vertices' piece colours and optionally the edges of the mesh it
+// is embedded in: tets, or a cloth's triangle copies) sits in the page as JSON with base64 arrays, so the page works offline from file://.
 //
 // For tests and scripting, window.tetcutViewer exposes the state and the same actions as the
 // controls: { ready, frameCount, frame, setFrame(i), setPieces(on), setTets(on), error }.
@@ -70,6 +70,10 @@ const data = JSON.parse(document.getElementById('tetcut-data').textContent);
 const frames = readFrames(data);
 api.frameCount = frames.length;
 document.getElementById('title').textContent = data.title ?? 'tetcut';
+// What the mesh edges are: an embedding tet mesh's, or a cloth's triangle copies.
+const meshName = data.mesh_kind === 'triangles' ? { control: 'triangle copies', stats: 'triangle' }
+                                                : { control: 'embedding tets', stats: 'tet' };
+document.getElementById('tets-label').textContent = meshName.control;
 
 // --- scene -----------------------------------------------------------------------------------
 const container = document.getElementById('view');
@@ -141,7 +145,7 @@ function show() {
   ui.label.textContent = `frame ${state.frame + 1} / ${frames.length}` +
     (time != null ? `  \u00b7  t = ${time.toFixed(3)} s` : '');
   ui.stats.textContent = `${frame.triangles.length / 3} triangles, ${pieces} piece${pieces === 1 ? '' : 's'}` +
-    (frame.mesh ? `, ${frame.mesh.edges.length / 2} tet edges` : '');
+    (frame.mesh ? `, ${frame.mesh.edges.length / 2} ${meshName.stats} edges` : '');
   api.frame = state.frame;
   draw();
 }
