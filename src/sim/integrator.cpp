@@ -212,6 +212,9 @@ StepReport Simulator::minimise(const StepOptions& options, bool inertia) {
   // this step).
   if (s.surface_contact.enabled()) {
     const Clock::time_point contact_start = Clock::now();
+    // The two sides of fresh cuts are guarded against passing through each other over the step
+    // (first: the last step's joins measured what the guards need, at these positions).
+    s.surface_contact.lag_guards(s.start);
     // Friction acts over this step with the normals and forces of its start (lagged).
     // (A static solve has no step to slip over: none.)
     if (inertia) {
@@ -219,8 +222,6 @@ StepReport Simulator::minimise(const StepOptions& options, bool inertia) {
     } else {
       s.surface_contact.drop_friction();
     }
-    // The two sides of fresh cuts are guarded against passing through each other over the step.
-    s.surface_contact.lag_guards(s.start);
     s.displacement = x - s.start;
     const double t = s.surface_contact.max_step(s.start, s.displacement.data());
     if (t < 1) {

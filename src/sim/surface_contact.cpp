@@ -27,6 +27,9 @@ constexpr int kMaxAdvances = 64;
 // triangles of collinear points and of points a rounding apart (exactly, in the material), whose
 // rounded corners give them a normal in any direction.
 constexpr double kFlat = 1e-6;
+// Two guards of one vertex are on one plane when their unit normals' dot product is within this
+// of 1 (coplanar triangles of one cut polygon: equal up to the rounding of their corners).
+constexpr double kSamePlane = 1e-6;
 // A guard's vertex may lie beside its triangle by up to the triangle's size (its barycentric
 // coordinates down to -1).
 constexpr double kBeside = 1;
@@ -151,6 +154,7 @@ void SurfaceContact::clear_surface() {
   friction_.clear();
   guards_.clear();
   rho_ = -1;
+  measured_ = -1;
   tree_built_ = false;
   group_copy_.clear();
 }
@@ -342,19 +346,49 @@ ContactTerm SurfaceContact::term(const Candidate& c, const collision::Proximity&
   return t;
 }
 
-void SurfaceContact::measure() {
+void SurfaceContact::measure(Measure which) {
+  const int have = measured_;
+  if (have == static_cast<int>(Measure::kAll) || have == static_cast<int>(which) ||
+      (have == static_cast<int>(Measure::kJoined) && which == Measure::kJoinedVertexTriangle)) {
+    return;
+  }
+  measured_ = static_cast<int>(which);
   proximities_.resize(candidates_.size());
   for_chunks(static_cast<Index>(candidates_.size()), kNodeChunk, [&](Index begin, Index end, Index) {
-    for (Index k = begin; k < end; ++k) proximities_[k] = proximity(candidates_[k], y_);
+    for (Index k = begin; k < end; ++k) {
+      const Candidate& c = candidates_[k];
+      const bool skip = which == Measure::kCounted                ? (c.joined || c.sutured)
+                        : which == Measure::kJoined               ? !c.joined
+                        : which == Measure::kJoinedVertexTriangle ? (!c.joined || c.edges)
+                                                                  : false;
+      if (skip) {
+        proximities_[k].distance = std::numeric_limits<double>::infinity();
+      } else {
+        proximities_[k] = proximity(c, y_);
+      }
+    }
   });
 }
 
 void SurfaceContact::cover(const Points& at, double sweep) {
   if (sutures_changed_) mark_joined();
-  place(at, &y_);
+  place(at, &placed_);
+  if (placed_.rows() != y_.rows() || placed_ != y_) {
+    y_.swap(placed_);
+    measured_ = -1;
+  }
   const double dhat = settings_.thickness;
   if (rho_ >= 0 && reference_.rows() == y_.rows()) {
-    const double moved = y_.rows() > 0 ? (y_ - reference_).rowwise().norm().maxCoeff() : 0.0;
+    // How far any vertex moved relative to the others since the list was built: a motion common
+    // to all (a translation T) changes no distance, so the displacements are measured from the
+    // centre of their box (|d_i - T| for that T bounds each vertex's share of a pair's change).
+    // Falling pieces then keep their list.
+    double moved = 0;
+    if (y_.rows() > 0) {
+      const Points displacement = y_ - reference_;
+      const Eigen::RowVector3d centre = 0.5 * (displacement.colwise().minCoeff() + displacement.colwise().maxCoeff());
+      moved = (displacement.rowwise() - centre).rowwise().norm().maxCoeff();
+    }
     if (2 * (moved + sweep) + dhat <= rho_) return;
   }
   reference_ = y_;
@@ -366,6 +400,7 @@ void SurfaceContact::cover(const Points& at, double sweep) {
 
 void SurfaceContact::rebuild(double rho) {
   rho_ = rho;
+  measured_ = -1;
   ++rebuilds_;
   const Points& y = reference_;
   // Boxes of every triangle and edge: a pair's boxes are compared before its distance is
@@ -411,7 +446,9 @@ void SurfaceContact::rebuild(double rho) {
       const std::array<Index, 4> k = corners(c);
       const bool shared = c.edges ? (k[0] == k[2] || k[0] == k[3] || k[1] == k[2] || k[1] == k[3]) : (k[0] == k[1] || k[0] == k[2] || k[0] == k[3]);
       if (shared || !(proximity(c, y).distance <= rho)) return;
-      c.rest_close = proximity(c, rest_y_).distance < settings_.thickness ? 1 : 0;
+      // Whether the pair was close in the material matters only to sutures (mark_joined), which
+      // rebuild the list when they change.
+      c.rest_close = !sutured_.empty() && proximity(c, rest_y_).distance < settings_.thickness ? 1 : 0;
       out.push_back(c);
     };
     // The primitives of copy g that reach copy h's box, then those pairs: most pairs of nearby
@@ -469,6 +506,7 @@ void SurfaceContact::rebuild(double rho) {
 }
 
 void SurfaceContact::mark_joined() {
+  measured_ = -1;  // which pairs count has changed
   // Sutured: close in the material, with a corner in a copy a spring holds (a primitive's own
   // copy and its corners' copies may differ: a triangle's vertices can be embedded in its
   // neighbours).
@@ -505,6 +543,7 @@ void SurfaceContact::suture(Index copy_a, Index copy_b) {
   const std::uint64_t key = copy_pair(copy_a, copy_b);
   suture_pairs_.insert(std::lower_bound(suture_pairs_.begin(), suture_pairs_.end(), key), key);
   sutures_changed_ = true;
+  rho_ = -1;  // the candidates' rest_close flags are wanted now
 }
 
 void SurfaceContact::clear_sutures() {
@@ -529,7 +568,12 @@ double SurfaceContact::max_step(const Points& from, const double* direction) {
       moved_.row(v) = d.transpose();
     }
   });
-  const double sweep = V > 0 ? moved_.rowwise().norm().maxCoeff() : 0.0;
+  // The motion relative to the others (a common translation moves no pair closer; see cover).
+  double sweep = 0;
+  if (V > 0) {
+    const Eigen::RowVector3d centre = 0.5 * (moved_.colwise().minCoeff() + moved_.colwise().maxCoeff());
+    sweep = (moved_.rowwise() - centre).rowwise().norm().maxCoeff();
+  }
   if (!(sweep > 0)) return 1;
   cover(from, sweep);
   std::vector<double> smallest(static_cast<std::size_t>((static_cast<Index>(candidates_.size()) + kNodeChunk - 1) / kNodeChunk) + 1, 1.0);
@@ -605,8 +649,16 @@ void SurfaceContact::lag_guards(const Points& start) {
   guards_.clear();
   if (!enabled() || joins_.empty()) return;
   cover(start, 0);
-  measure();
+  measure(Measure::kJoinedVertexTriangle);
   const double dhat = settings_.thickness, delta = guard_allowance();
+  struct Found {
+    Index vertex;
+    double inside;  // the smallest barycentric coordinate of the foot
+    std::size_t k;  // the candidate
+    std::array<double, 3> beta;
+    Vec3 normal;
+  };
+  std::vector<Found> found;
   for (std::size_t k = 0; k < candidates_.size(); ++k) {
     const Candidate& c = candidates_[k];
     if (!c.joined || c.sutured || c.edges || !(proximities_[k].distance < dhat)) continue;
@@ -636,20 +688,48 @@ void SurfaceContact::lag_guards(const Points& start) {
     if (std::min({beta_a, beta_b, beta_c}) < -kBeside) continue;
     const double g = normal.dot(p - (beta_a * a + beta_b * b + beta_c * q));
     if (!(g > -delta)) continue;  // already behind: nothing a guard could hold
-    collision::Proximity foot;
-    foot.w = {1.0, -beta_a, -beta_b, -beta_c};
-    guards_.push_back({term(c, foot), normal});
+    found.push_back({corner[0], std::min({beta_a, beta_b, beta_c}), k, {beta_a, beta_b, beta_c}, normal});
+  }
+  // One guard per vertex and plane: a vertex facing a fan of coplanar triangles (the other side
+  // of its cut polygon) needs one, by the triangle it lies most inside; its planes differ only
+  // where cuts or faces meet. Fewer terms, the same constraint: g is the same on coplanar
+  // triangles.
+  std::sort(found.begin(), found.end(), [](const Found& x, const Found& y) {
+    return x.vertex != y.vertex ? x.vertex < y.vertex : x.inside != y.inside ? x.inside > y.inside : x.k < y.k;
+  });
+  for (std::size_t i = 0; i < found.size();) {
+    std::size_t end = i;
+    while (end < found.size() && found[end].vertex == found[i].vertex) ++end;
+    const std::size_t first_guard = guards_.size();
+    for (std::size_t j = i; j < end; ++j) {
+      bool same_plane = false;
+      for (std::size_t h = first_guard; h < guards_.size() && !same_plane; ++h) same_plane = guards_[h].normal.dot(found[j].normal) > 1 - kSamePlane;
+      if (same_plane) continue;
+      collision::Proximity foot;
+      foot.w = {1.0, -found[j].beta[0], -found[j].beta[1], -found[j].beta[2]};
+      guards_.push_back({term(candidates_[found[j].k], foot), found[j].normal});
+    }
+    i = end;
   }
 }
 
 void SurfaceContact::update_joins(const Points& at) {
   if (!enabled() || joins_.empty()) return;
   cover(at, 0);
-  measure();
+  // Touching by a vertex-triangle pair (most joins), else by an edge pair, measured only for
+  // the joins the first left untouched.
+  measure(Measure::kJoinedVertexTriangle);
   std::vector<std::uint8_t> touching(joins_.size(), 0);
+  const auto join_of = [&](const Candidate& c) {
+    return static_cast<std::size_t>(std::lower_bound(joins_.begin(), joins_.end(), c.copies) - joins_.begin());
+  };
   for (std::size_t k = 0; k < candidates_.size(); ++k) {
-    if (!candidates_[k].joined || !(proximities_[k].distance < settings_.thickness)) continue;
-    touching[static_cast<std::size_t>(std::lower_bound(joins_.begin(), joins_.end(), candidates_[k].copies) - joins_.begin())] = 1;
+    if (!candidates_[k].joined || candidates_[k].edges || !(proximities_[k].distance < settings_.thickness)) continue;
+    touching[join_of(candidates_[k])] = 1;
+  }
+  for (const Candidate& c : candidates_) {
+    if (!c.joined || !c.edges || touching[join_of(c)]) continue;
+    if (proximity(c, y_).distance < settings_.thickness) touching[join_of(c)] = 1;
   }
   std::size_t kept = 0;
   for (std::size_t j = 0; j < joins_.size(); ++j) {

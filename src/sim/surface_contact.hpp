@@ -188,7 +188,7 @@ class SurfaceContact {
     Index a, b;            // vertex and triangle, or two edges
     std::uint8_t edges;    // 0: vertex-triangle, 1: edge-edge
     std::uint8_t joined;      // copies joined across a cut (not counted)
-    std::uint8_t rest_close;  // within dhat in the material
+    std::uint8_t rest_close;  // within dhat in the material (computed only while sutures hold)
     std::uint8_t sutured;     // rest_close between sutured copies (not counted)
     std::uint64_t copies;     // the copy pair, (min << 32) | max
   };
@@ -199,8 +199,12 @@ class SurfaceContact {
   void group_primitives();
   /// The candidates' joined and sutured flags, from joins_ and sutured_.
   void mark_joined();
-  /// proximities_ of every candidate at y_, in parallel.
-  void measure();
+  /// proximities_ of the candidates at y_, in parallel: every one, those the barrier counts, the
+  /// pairs of joined copies (what the joins look at) or their vertex-triangle pairs (what the
+  /// guards look at); the others' distances left at infinity. Right after a cut most of the list
+  /// is joined pairs.
+  enum class Measure { kAll, kCounted, kJoined, kJoinedVertexTriangle };
+  void measure(Measure which = Measure::kAll);
   collision::Proximity proximity(const Candidate& c, const Points& y) const;
   std::array<Index, 4> corners(const Candidate& c) const;
   ContactTerm term(const Candidate& c, const collision::Proximity& p) const;
@@ -248,7 +252,10 @@ class SurfaceContact {
   // The Verlet list: candidates within rho_ of each other at vertex positions reference_.
   std::vector<Candidate> candidates_;
   std::vector<collision::Proximity> proximities_;
-  Points reference_, y_, moved_;
+  Points reference_, y_, moved_, placed_;
+  // What proximities_ hold for the candidates at y_ (a Measure), or -1: a step's end (the joins)
+  // and the next step's start (the guards) measure the same positions.
+  int measured_ = -1;
   double rho_ = -1;
   // The primitives by the copy that owns them (CSR over group_copy_, the owning copies in
   // ascending order), and a box hierarchy over each copy's primitives.
@@ -264,7 +271,7 @@ template <typename Visit>
 void SurfaceContact::for_each_active(const Points& at, Visit&& visit) {
   if (!enabled()) return;
   cover(at, 0);
-  measure();
+  measure(Measure::kCounted);
   const double dhat = settings_.thickness, kappa = settings_.stiffness;
   for (std::size_t k = 0; k < candidates_.size(); ++k) {
     const collision::Proximity& p = proximities_[k];
