@@ -445,10 +445,11 @@ void SurfaceContact::rebuild(double rho) {
     const auto consider = [&](Candidate c) {
       const std::array<Index, 4> k = corners(c);
       const bool shared = c.edges ? (k[0] == k[2] || k[0] == k[3] || k[1] == k[2] || k[1] == k[3]) : (k[0] == k[1] || k[0] == k[2] || k[0] == k[3]);
-      if (shared || !(proximity(c, y).distance <= rho)) return;
-      // Whether the pair was close in the material matters only to sutures (mark_joined), which
-      // rebuild the list when they change.
-      c.rest_close = !sutured_.empty() && proximity(c, rest_y_).distance < settings_.thickness ? 1 : 0;
+      const double now = proximity(c, y).distance;
+      if (shared || !(now <= rho)) return;
+      // A pair touching now counts as close in the material too: joined, it is left out (the
+      // barrier is infinite at distance 0), as the joins of surfaces touching from the start are.
+      c.rest_close = proximity(c, rest_y_).distance < settings_.thickness || !(now > 0) ? 1 : 0;
       out.push_back(c);
     };
     // The primitives of copy g that reach copy h's box, then those pairs: most pairs of nearby
@@ -512,7 +513,10 @@ void SurfaceContact::mark_joined() {
   // neighbours).
   const auto sutured = [&](Index copy) { return static_cast<std::size_t>(copy) < sutured_.size() && sutured_[static_cast<std::size_t>(copy)] != 0; };
   for (Candidate& c : candidates_) {
-    c.joined = std::binary_search(joins_.begin(), joins_.end(), c.copies) ? 1 : 0;
+    // Of joined copies, only the pairs that were close in the material: the two sides of the cut.
+    // Their other pairs, apart when the cut was made, collide as any others (sticks sliding
+    // along each other while their cut faces still touch somewhere).
+    c.joined = c.rest_close && std::binary_search(joins_.begin(), joins_.end(), c.copies) ? 1 : 0;
     c.sutured = 0;
     if (sutured_.empty()) continue;
     const std::array<Index, 4> k = corners(c);
@@ -543,7 +547,6 @@ void SurfaceContact::suture(Index copy_a, Index copy_b) {
   const std::uint64_t key = copy_pair(copy_a, copy_b);
   suture_pairs_.insert(std::lower_bound(suture_pairs_.begin(), suture_pairs_.end(), key), key);
   sutures_changed_ = true;
-  rho_ = -1;  // the candidates' rest_close flags are wanted now
 }
 
 void SurfaceContact::clear_sutures() {
