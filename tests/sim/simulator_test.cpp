@@ -20,6 +20,19 @@ namespace {
 
 class Integrator : public ::testing::TestWithParam<Model> {};
 
+// Every tet's corners as contact points.
+std::vector<EmbeddedPoint> corner_points(const TetMesh& mesh) {
+  std::vector<EmbeddedPoint> points;
+  for (Index t = 0; t < mesh.num_tets(); ++t) {
+    for (int k = 0; k < 4; ++k) {
+      EmbeddedPoint p{t, Eigen::Vector4d::Zero()};
+      p.weights[k] = 1;
+      points.push_back(p);
+    }
+  }
+  return points;
+}
+
 TEST_P(Integrator, PatchTestAffineDeformationHasNoInteriorForces) {
   const TetMesh grid = make_grid(Box{}, {3, 3, 3}, 6);
   Material material;
@@ -167,14 +180,7 @@ TEST_P(Integrator, CubeComesToRestOnTheGround) {
   material.youngs_modulus = 1e6;
   material.mass_damping = 2;
   Simulator sim(cube, material);
-  std::vector<EmbeddedPoint> points;
-  for (Index t = 0; t < cube.num_tets(); ++t) {
-    for (int k = 0; k < 4; ++k) {
-      EmbeddedPoint p{t, Eigen::Vector4d::Zero()};
-      p.weights[k] = 1;
-      points.push_back(p);
-    }
-  }
+  const std::vector<EmbeddedPoint> points = corner_points(cube);
   sim.set_contact_points(points);
   sim.add_obstacle(Obstacle::plane(Vec3::Zero(), Vec3(0, 0, 1)));
   StepOptions options;
@@ -197,14 +203,7 @@ double slide_on_the_ground(Model model, double mu, Vec3* final_velocity) {
   material.model = model;
   material.youngs_modulus = 1e6;
   Simulator sim(block, material);
-  std::vector<EmbeddedPoint> points;
-  for (Index t = 0; t < block.num_tets(); ++t) {
-    for (int k = 0; k < 4; ++k) {
-      EmbeddedPoint p{t, Eigen::Vector4d::Zero()};
-      p.weights[k] = 1;
-      points.push_back(p);
-    }
-  }
+  const std::vector<EmbeddedPoint> points = corner_points(block);
   sim.set_contact_points(points);
   sim.add_obstacle(Obstacle::plane(Vec3::Zero(), Vec3(0, 0, 1)).with_friction(mu));
   StepOptions options;

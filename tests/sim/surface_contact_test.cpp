@@ -195,16 +195,27 @@ TEST(SurfaceContact, BlocksDroppedOnEachOtherComeToRest) {
   EXPECT_LT(upper_bottom, 0.89 + sim.surface_contact().thickness);
 }
 
+// A block cut in two by x = 0.43, simulated with surface contact.
+struct CutBlock {
+  Cutter cutter{make_grid({Vec3(0, 0, 0), Vec3(1, 1, 1)}, {4, 4, 4}, 5)};
+  CutResult result;
+  sim::Simulator sim;
+  CutBlock() : result(cut(cutter)), sim(result.mesh.mesh, soft(), result.mesh.material_fractions()) {
+    sim.set_contact_surface(result.surface);
+  }
+  static CutResult cut(Cutter& cutter) {
+    cutter.cut(plane_square(Vec3(0.43, 0.5, 0.5), Vec3(1, 0, 0), 3));  // through the whole block
+    return cutter.result();
+  }
+};
+
 TEST(SurfaceContact, HalvesOfACutBlockPartAndMeetAgainWithoutCrossing) {
-  const TetMesh mesh = make_grid({Vec3(0, 0, 0), Vec3(1, 1, 1)}, {4, 4, 4}, 5);
-  Cutter cutter(mesh);
-  cutter.cut(plane_square(Vec3(0.43, 0.5, 0.5), Vec3(1, 0, 0), 3));  // x = 0.43 through the whole block
-  const CutResult result = cutter.result();
+  CutBlock block;
+  const CutResult& result = block.result;
   ASSERT_EQ(result.mesh.num_pieces(), 2);
   const MaterialSurface& surface = result.surface;
-  const auto& copies = cutter.tet_nodes();
-  sim::Simulator sim(result.mesh.mesh, soft(), result.mesh.material_fractions());
-  sim.set_contact_surface(surface);
+  const auto& copies = block.cutter.tet_nodes();
+  sim::Simulator& sim = block.sim;
   EXPECT_GT(sim.surface_contact().joined_copy_pairs, 0);  // the fresh cut's two sides touch
   EXPECT_EQ(sim.surface_contact_energy(), 0);              // and do not push each other
   // The halves part at 0.5 m/s each, then are thrown back together at 2 m/s each.
@@ -242,15 +253,12 @@ TEST(SurfaceContact, HalvesOfACutBlockPartAndMeetAgainWithoutCrossing) {
 // fresh cut, which coincide, are joined (no barrier between them), and guarded: neither half
 // passes into the other by more than the allowance.
 TEST(SurfaceContact, HalvesOfAFreshCutDrivenIntoEachOtherDoNotPassThrough) {
-  const TetMesh mesh = make_grid({Vec3(0, 0, 0), Vec3(1, 1, 1)}, {4, 4, 4}, 5);
-  Cutter cutter(mesh);
-  cutter.cut(plane_square(Vec3(0.43, 0.5, 0.5), Vec3(1, 0, 0), 3));
-  const CutResult result = cutter.result();
+  CutBlock block;
+  const CutResult& result = block.result;
   ASSERT_EQ(result.mesh.num_pieces(), 2);
   const MaterialSurface& surface = result.surface;
-  const auto& copies = cutter.tet_nodes();
-  sim::Simulator sim(result.mesh.mesh, soft(), result.mesh.material_fractions());
-  sim.set_contact_surface(surface);
+  const auto& copies = block.cutter.tet_nodes();
+  sim::Simulator& sim = block.sim;
   ASSERT_GT(sim.surface_contact().joined_copy_pairs, 0);
   Points v = Points::Zero(sim.num_nodes(), 3);
   const Index left_piece = [&] {
