@@ -83,7 +83,7 @@ void write_and_report(const TetMesh& mesh, const CutResult& result, const CutOut
   fmt::print("  pieces           {}\n", result.mesh.num_pieces());
   fmt::print("  volume           {:.17g}\n", volume);
   fmt::print("  surface          {} triangles, area {:.17g}, {}\n", result.surface.surface.num_triangles(), surface.area,
-             surface.watertight ? "closed" : "NOT closed");
+             surface.balanced ? "balanced" : "NOT balanced");
   std::string times;
   for (const auto& [stage, seconds] : timings.items()) {
     times += fmt::format("{}{} {:.3f} s", times.empty() ? "" : ", ", stage, seconds.get<double>());
@@ -116,8 +116,8 @@ void write_and_report(const TetMesh& mesh, const CutResult& result, const CutOut
          {{"triangles", result.surface.surface.num_triangles()},
           {"vertices", result.surface.surface.num_vertices()},
           {"area", surface.area},
-          {"closed", surface.watertight},
-          {"manifold", surface.closed},
+          {"balanced", surface.balanced},
+          {"two_manifold", surface.two_manifold},
           {"enclosed_volume", surface.enclosed_volume}}},
         {"timings", timings},
     });

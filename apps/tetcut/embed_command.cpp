@@ -78,7 +78,7 @@ RunSummary embed_summary(const EmbedCommandOptions& options, const EmbedOptions&
   RunSummary summary;
   const std::string into = options.mesh.empty() ? fmt::format("a BCC lattice of spacing {:.6g}", spacing) : options.mesh.string();
   summary.headline = fmt::format("embedded {} ({} triangles, {} component(s){}) in {}", options.surface.string(),
-                                 check.triangles, check.components, check.closed() ? ", closed" : ", open", into);
+                                 check.triangles, check.components, check.balanced() ? ", balanced" : ", not balanced", into);
   summary.report = Json{{"surface_in", options.surface.string()},
                         {"mesh", options.mesh.empty() ? Json(nullptr) : Json(options.mesh.string())},
                         {"lattice_spacing", options.mesh.empty() ? Json(spacing) : Json(nullptr)}};
@@ -91,8 +91,8 @@ RunSummary embed_summary(const EmbedCommandOptions& options, const EmbedOptions&
                         {{"keep", keep},
                          {"surface_vertices", check.vertices},
                          {"surface_components", check.components},
-                         {"surface_closed", check.closed()},
-                         {"boundary_edges", check.boundary_edges},
+                         {"surface_balanced", check.balanced()},
+                         {"unbalanced_edges", check.unbalanced_edges},
                          {"nonmanifold_edges", check.nonmanifold_edges},
                          {"tets_with_material", report.tets_with_material},
                          {"tets_duplicated", report.tets_duplicated},

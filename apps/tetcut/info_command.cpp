@@ -45,7 +45,9 @@ Json surface_json(const TriangleSurface& surface, const SurfaceStats& s) {
       {"bbox", {{"min", {s.bbox_min[0], s.bbox_min[1], s.bbox_min[2]}},
                 {"max", {s.bbox_max[0], s.bbox_max[1], s.bbox_max[2]}}}},
       {"area", s.area},
-      {"closed", s.closed},
+      {"balanced", s.balanced},
+      {"two_manifold", s.two_manifold},
+      {"unbalanced_edges", s.num_unbalanced_edges},
       {"boundary_edges", s.num_boundary_edges},
       {"nonmanifold_edges", s.num_nonmanifold_edges},
       {"degenerate_triangles", s.num_degenerate_triangles},
@@ -75,10 +77,13 @@ void print_surface_summary(const std::string& name, const TriangleSurface& surfa
   fmt::print("  bounding box     ({:.6g}, {:.6g}, {:.6g}) - ({:.6g}, {:.6g}, {:.6g})\n", s.bbox_min[0], s.bbox_min[1],
              s.bbox_min[2], s.bbox_max[0], s.bbox_max[1], s.bbox_max[2]);
   fmt::print("  area             {:.17g}\n", s.area);
-  fmt::print("  closed           {}", s.closed ? "yes" : "no");
-  if (!s.closed) fmt::print(" ({} boundary edges, {} non-manifold edges)", s.num_boundary_edges, s.num_nonmanifold_edges);
+  fmt::print("  balanced         {}", s.balanced ? "yes" : "no");
+  if (!s.balanced) fmt::print(" ({} edges used more often in one direction than the other)", s.num_unbalanced_edges);
   fmt::print("\n");
-  if (s.closed) fmt::print("  enclosed volume  {:.17g}\n", s.enclosed_volume);
+  fmt::print("  two-manifold     {}", s.two_manifold ? "yes" : "no");
+  if (!s.two_manifold) fmt::print(" ({} boundary edges, {} non-manifold edges)", s.num_boundary_edges, s.num_nonmanifold_edges);
+  fmt::print("\n");
+  if (s.balanced) fmt::print("  enclosed volume  {:.17g}\n", s.enclosed_volume);
   if (s.num_degenerate_triangles > 0) fmt::print("  degenerate       {} triangles\n", s.num_degenerate_triangles);
 }
 

@@ -37,8 +37,8 @@ Cutter embed(TetMesh mesh, const TriangleSurface& surface, const EmbedOptions& o
   r = EmbedReport{};
   auto start = Clock::now();
   r.check = check_surface(surface);
-  if (options.keep == KeepMaterial::kInside && !r.check.closed()) {
-    std::string message = "the surface is not closed: " + std::to_string(r.check.boundary_edges) +
+  if (options.keep == KeepMaterial::kInside && !r.check.balanced()) {
+    std::string message = "the surface is not closed: " + std::to_string(r.check.unbalanced_edges) +
                           " edges are used more often in one direction than the other";
     if (r.check.misoriented_edges > 0) {
       message += " (" + std::to_string(r.check.misoriented_edges) + " of them where neighbouring triangles disagree on orientation)";
