@@ -22,6 +22,7 @@ const char* kind_name(ErrorKind kind) {
     case ErrorKind::kIo: return "io";
     case ErrorKind::kUnsupported: return "unsupported";
     case ErrorKind::kInvalidArgument: return "invalid_argument";
+    case ErrorKind::kInternal: return "internal";
   }
   return "unknown";
 }
@@ -32,7 +33,7 @@ Box box_of(py::handle min, py::handle max) { return Box{vec3(min, "box_min"), ve
 
 void bind_meshes(py::module_& m) {
   // tetcut.Error: what the library throws, with its kind ('invalid_input', 'io', 'unsupported',
-  // 'invalid_argument'), the file and line it names (or '' and 0), and the bare message.
+  // 'invalid_argument', 'internal': a bug), the file and line it names (or '' and 0), and the bare message.
   // Never destroyed: the interpreter may be gone by the time statics are.
   static auto* error_type = new py::exception<Error>(m, "Error");
   error_type->doc() = "An error from tetcut: attributes kind, message, file (or ''), line (or 0).";

@@ -8,6 +8,7 @@
 #include <EGL/eglext.h>
 #include <GLES3/gl3.h>
 
+#include "util/broken.hpp"
 #include "util/union_find.hpp"
 
 #include <algorithm>
@@ -112,7 +113,7 @@ GLuint compile(GLenum kind, const char* source) {
   if (!ok) {
     char log[1024];
     glGetShaderInfoLog(shader, sizeof log, nullptr, log);
-    throw std::logic_error(std::string("render: shader does not compile: ") + log);
+    broken("render", std::string("shader does not compile: ") + log);
   }
   return shader;
 }

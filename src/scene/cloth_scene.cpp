@@ -34,6 +34,7 @@ PlanarMesh load_cloth_mesh(const Value& mesh, const std::filesystem::path& sourc
       const PlanarCutter check(planar);  // counter-clockwise, edges of at most two triangles
       return planar;
     } catch (const Error& e) {
+      if (e.kind() == ErrorKind::kInternal) throw;  // a bug, not a fault of the scene
       file->fail(path.string() + ": " + e.message());
     }
   }
@@ -159,6 +160,7 @@ ClothCut load_cloth_cut(const Value& cut, const std::filesystem::path& source, c
     try {
       path = spiral(to_plane(centre, plane).row(0).transpose(), spiral_cut->at("outer_radius").positive(), inner, spacing, step);
     } catch (const Error& e) {
+      if (e.kind() == ErrorKind::kInternal) throw;  // a bug, not a fault of the scene
       spiral_cut->fail(e.message());
     }
     if (const auto from = spiral_cut->get("from")) {

@@ -415,6 +415,7 @@ class LiveServer::Impl::Page : public std::enable_shared_from_this<Page> {
       }
       server_.command(weak_from_this(), std::move(command), Clock::now());
     } catch (const Error& e) {
+      if (e.kind() == ErrorKind::kInternal) throw;  // a bug, not a message to refuse
       server_.log("page " + std::to_string(id_) + ": refused a message (" + std::to_string(message.size()) + " bytes): " + e.what());
       text(live::error_message(e.what(), seq));
     }
@@ -521,6 +522,7 @@ void LiveServer::Impl::command(const std::weak_ptr<Page>& page, live::ClientComm
         }
       }
     } catch (const Error& e) {
+      if (e.kind() == ErrorKind::kInternal) throw;  // a bug, not an event to refuse
       log(std::string("refused an event: ") + e.what());
       reply(page, live::error_message(e.what(), command.seq));
     }
