@@ -6,8 +6,6 @@
 
 namespace tetcut::cli {
 
-double seconds_since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
-
 void check_not_input(const fs::path& output, const fs::path& input) {
   std::error_code ec;
   if (fs::exists(output, ec) && fs::equivalent(output, input, ec)) {

@@ -1,6 +1,6 @@
 #pragma once
 // What the subcommands share: checks of output paths, the options every tet mesh writer takes,
-// the JSON type of reports and the clock their timings come from.
+// the JSON type of reports, and the library's clock (util/stopwatch.hpp) for their timings.
 
 #include <tetcut/generators.hpp>
 #include <tetcut/io.hpp>
@@ -8,9 +8,10 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
-#include <chrono>
 #include <filesystem>
 #include <vector>
+
+#include "util/stopwatch.hpp"
 
 namespace tetcut::cli {
 
@@ -18,10 +19,6 @@ namespace fs = std::filesystem;
 
 /// Reports keep their keys in the order written.
 using Json = nlohmann::ordered_json;
-
-using Clock = std::chrono::steady_clock;
-
-double seconds_since(Clock::time_point start);
 
 /// Rejects an output path that names an input: writing would replace the data being read.
 void check_not_input(const fs::path& output, const fs::path& input);

@@ -10,6 +10,7 @@
 
 #include <cmath>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -28,14 +29,14 @@ EmbedOptions keep_option(const std::vector<std::string>& words) {
   const auto bad = [](const std::string& why) {
     return Error(ErrorKind::kInvalidArgument, "--keep: " + why + " (use: inside, largest, or point X Y Z)");
   };
-  if (mode == "inside" || mode == "largest") {
+  const std::optional<KeepMaterial> keep = keep_material_from_name(mode);
+  if (!keep) throw bad("unknown choice '" + mode + "'");
+  options.keep = *keep;
+  if (*keep != KeepMaterial::kPoint) {
     if (words.size() > 1) throw bad("'" + mode + "' takes no coordinates");
-    options.keep = mode == "inside" ? KeepMaterial::kInside : KeepMaterial::kLargest;
     return options;
   }
-  if (mode != "point") throw bad("unknown choice '" + mode + "'");
   if (words.size() != 4) throw bad("'point' needs three coordinates");
-  options.keep = KeepMaterial::kPoint;
   for (int k = 0; k < 3; ++k) {
     std::size_t used = 0;
     double value = 0;
@@ -84,11 +85,8 @@ RunSummary embed_summary(const EmbedCommandOptions& options, const EmbedOptions&
                         {"lattice_spacing", options.mesh.empty() ? Json(spacing) : Json(nullptr)}};
   summary.triangles = check.triangles;
   summary.skipped = check.degenerate_triangles;
-  const char* keep = embed_options.keep == KeepMaterial::kInside    ? "inside"
-                     : embed_options.keep == KeepMaterial::kLargest ? "largest"
-                                                                    : "point";
   summary.extra = Json{{"embed",
-                        {{"keep", keep},
+                        {{"keep", keep_material_name(embed_options.keep)},
                          {"surface_vertices", check.vertices},
                          {"surface_components", check.components},
                          {"surface_balanced", check.balanced()},

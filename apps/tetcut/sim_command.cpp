@@ -103,7 +103,7 @@ int run_sim(SimOptions& options) {
       render_options.camera.zoom = scene.picture_zoom;
       render_options.line_points = shown.line_points;  // a cloth's triangle copies
       render_options.lines = shown.lines;
-      render::write_png(options.out / fmt::format("frame_{:04d}.png", frame), render::render(surface, render_options));
+      render::write_png(options.out / frame_file_name("frame", frame, ".png"), render::render(surface, render_options));
     };
   }
   const SceneSummary summary = run_scene(scene, options.out, run);
@@ -111,7 +111,7 @@ int run_sim(SimOptions& options) {
   if (!options.animation.empty()) {
     const double every = scene.output_every > 0 ? scene.output_every : scene.step.dt;
     const double fps = options.fps > 0 ? options.fps : std::clamp(1 / every, 1.0, 60.0);
-    render::write_animation(options.out / "frame_%04d.png", fps, options.animation);
+    render::write_animation(options.out / frame_file_pattern("frame", ".png"), fps, options.animation);
     fmt::print("  animation        {} ({} frames at {:g} per second)\n", options.animation.string(), summary.frames, fps);
   }
   print_summary(options, summary);

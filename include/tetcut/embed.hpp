@@ -15,7 +15,9 @@
 #include <tetcut/cutter.hpp>
 #include <tetcut/generators.hpp>
 
+#include <optional>
 #include <string>
+#include <string_view>
 
 namespace tetcut {
 
@@ -47,6 +49,11 @@ enum class KeepMaterial {
   kLargest,  ///< the piece of largest volume after cutting the mesh by the surface
   kPoint,    ///< the piece holding EmbedOptions::point
 };
+
+/// The name scenes, the CLI and Python give each choice: "inside", "largest", "point".
+std::string_view keep_material_name(KeepMaterial keep);
+/// The choice keep_material_name calls `name`; nothing for any other word.
+std::optional<KeepMaterial> keep_material_from_name(std::string_view name);
 
 struct EmbedOptions {
   KeepMaterial keep = KeepMaterial::kInside;

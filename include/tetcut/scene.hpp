@@ -283,4 +283,11 @@ struct SceneSummary {
 /// the cut as triangles) where they are at each frame.
 SceneSummary run_scene(const Scene& scene, const std::filesystem::path& directory, const SceneRunOptions& options = {});
 
+/// The name of output frame `frame`'s file in a series: "<stem>_NNNN<extension>", four digits
+/// (mesh_0000.vtu, surface_0000.vtp, and tetcut sim's frame_0000.png). The one place these names
+/// are made.
+std::string frame_file_name(std::string_view stem, int frame, std::string_view extension);
+/// The same names as a printf pattern, "<stem>_%04d<extension>" (for ffmpeg: render::write_animation).
+std::string frame_file_pattern(std::string_view stem, std::string_view extension);
+
 }  // namespace tetcut

@@ -1,5 +1,6 @@
 #include "cells/cell_complex.hpp"
 
+#include "mesh/local_index.hpp"
 #include "util/broken.hpp"
 
 #include <tetcut/error.hpp>
@@ -16,18 +17,6 @@ namespace tetcut::cells {
 
 using geometry::Plane;
 using registry::OrientedPlane;
-
-namespace {
-
-// Local index (0-3) of `node` in tet row `tet`, or -1.
-int local_index(const Tets& tets, Index tet, Index node) {
-  for (int k = 0; k < 4; ++k) {
-    if (tets(tet, k) == node) return k;
-  }
-  return -1;
-}
-
-}  // namespace
 
 CellComplex::CellComplex(const TetMesh& mesh, registry::IntersectionRegistry& registry)
     : mesh_(&mesh),

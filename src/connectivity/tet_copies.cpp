@@ -1,5 +1,6 @@
 #include "connectivity/tet_copies.hpp"
 
+#include "mesh/local_index.hpp"
 #include "util/broken.hpp"
 #include "util/union_find.hpp"
 
@@ -11,14 +12,6 @@ namespace {
 
 using cells::CellComplex;
 using cells::Side;
-
-int local_index(const Tets& tets, Index tet, Index node) {
-  for (int k = 0; k < 4; ++k) {
-    if (tets(tet, k) == node) return k;
-  }
-  return -1;
-}
-
 
 // Calls join(copy_a, copy_b) for each pair of copies that face `face` joins: through each uncovered
 // facet with material on both sides, or through the whole face between two unrefined tets.

@@ -31,6 +31,31 @@ void keep_piece(cells::CellComplex& complex, const connectivity::TetCopies& copi
 
 }  // namespace
 
+namespace {
+
+struct KeepName {
+  KeepMaterial keep;
+  std::string_view name;
+};
+constexpr KeepName kKeepNames[] = {
+    {KeepMaterial::kInside, "inside"}, {KeepMaterial::kLargest, "largest"}, {KeepMaterial::kPoint, "point"}};
+
+}  // namespace
+
+std::string_view keep_material_name(KeepMaterial keep) {
+  for (const KeepName& k : kKeepNames) {
+    if (k.keep == keep) return k.name;
+  }
+  return "unknown";
+}
+
+std::optional<KeepMaterial> keep_material_from_name(std::string_view name) {
+  for (const KeepName& k : kKeepNames) {
+    if (k.name == name) return k.keep;
+  }
+  return std::nullopt;
+}
+
 Cutter embed(TetMesh mesh, const TriangleSurface& surface, const EmbedOptions& options, EmbedReport* report) {
   EmbedReport local;
   EmbedReport& r = report != nullptr ? *report : local;

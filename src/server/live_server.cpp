@@ -308,7 +308,7 @@ struct LiveServer::Impl {
       // A frame for each step, and for commands while paused (a pin, a reset); a cut sent its own.
       if (due || (paused && changed && !topology)) publish(nullptr);
       blade_received.reset();
-      const double window = std::chrono::duration<double>(Clock::now() - window_start).count();
+      const double window = seconds_since(window_start);
       if (window >= kStatsSeconds || topology || changed) {
         if (window >= kStatsSeconds) {
           figures.steps_per_second = window_steps / window;

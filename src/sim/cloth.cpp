@@ -8,6 +8,7 @@
 
 #include <tetcut/cloth.hpp>
 #include <tetcut/error.hpp>
+#include <tetcut/sim.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -189,7 +190,7 @@ ClothSimulator::ClothSimulator(const PlanarCutMesh& mesh, const Points& world, c
     : state_(std::make_unique<State>()) {
   State& s = *state_;
   if (!(material.density > 0) || !(material.stretch_stiffness > 0) || !(material.bending_stiffness >= 0) ||
-      !(material.poisson_ratio > -1 && material.poisson_ratio < 0.5) || !(material.mass_damping >= 0)) {
+      !valid_poissons_ratio(material.poisson_ratio) || !(material.mass_damping >= 0)) {
     throw Error(ErrorKind::kInvalidArgument,
                 "cloth material: density and stretch stiffness must be positive, bending stiffness and damping not "
                 "negative, and Poisson's ratio in (-1, 0.5)");

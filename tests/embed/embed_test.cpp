@@ -93,6 +93,15 @@ TEST(CheckSurface, CountsWeldsBoundariesAndOrientation) {
   EXPECT_EQ(check_surface(sliver).degenerate_triangles, 1);
 }
 
+// Scenes, the CLI and Python name the choices of material alike, through one table.
+TEST(Embed, KeepMaterialNamesRoundTrip) {
+  for (const KeepMaterial keep : {KeepMaterial::kInside, KeepMaterial::kLargest, KeepMaterial::kPoint}) {
+    EXPECT_EQ(keep_material_from_name(keep_material_name(keep)), keep);
+  }
+  EXPECT_EQ(keep_material_name(KeepMaterial::kLargest), "largest");
+  EXPECT_FALSE(keep_material_from_name("outside").has_value());
+}
+
 TEST(CheckSurface, RejectsNanAndMissingVertices) {
   TriangleSurface s = box_surface(Box{Vec3::Zero(), Vec3::Ones()});
   s.vertices(3, 1) = std::nan("");
