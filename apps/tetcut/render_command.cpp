@@ -74,10 +74,14 @@ RenderInput render_input(const fs::path& in, int frame) {
   return r;
 }
 
+// The picture's size unless --size says: SVGA, a still worth a closer look than a frame of
+// tetcut sim (640 x 480), and quick for Mesa's software renderer.
+constexpr int kDefaultWidth = 800, kDefaultHeight = 600;
+
 struct RenderCommandOptions {
   fs::path input;
   fs::path out;
-  std::vector<int> size{800, 600};
+  std::vector<int> size{kDefaultWidth, kDefaultHeight};
   render::Camera camera;
   bool pieces = false;
   std::vector<std::string> wireframe;

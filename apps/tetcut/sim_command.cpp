@@ -21,6 +21,14 @@ namespace tetcut::cli {
 
 namespace {
 
+// Without a camera box in the scene, pictures frame the first frame's surface grown by a quarter
+// of its size on every side (by half in all): room for the pieces to move without the camera
+// moving with them.
+constexpr double kFrameMargin = 0.25;
+// An animation's default rate is real time (1 / output_every), within what players show smoothly
+// and files stay small at.
+constexpr double kMinFps = 1, kMaxFps = 60;
+
 struct SimOptions {
   fs::path scene;
   fs::path out;
@@ -91,7 +99,7 @@ int run_sim(SimOptions& options) {
       const TriangleSurface& surface = shown.surface;
       if (frame_box.isEmpty()) {
         for (Index v = 0; v < surface.num_vertices(); ++v) frame_box.extend(surface.vertices.row(v).transpose());
-        const Vec3 grow = 0.25 * frame_box.sizes();
+        const Vec3 grow = kFrameMargin * frame_box.sizes();
         frame_box = Eigen::AlignedBox3d(frame_box.min() - grow, frame_box.max() + grow);
       }
       render::RenderOptions render_options;
@@ -110,7 +118,7 @@ int run_sim(SimOptions& options) {
   if (terminal) fmt::print(stderr, "\n");
   if (!options.animation.empty()) {
     const double every = scene.output_every > 0 ? scene.output_every : scene.step.dt;
-    const double fps = options.fps > 0 ? options.fps : std::clamp(1 / every, 1.0, 60.0);
+    const double fps = options.fps > 0 ? options.fps : std::clamp(1 / every, kMinFps, kMaxFps);
     render::write_animation(options.out / frame_file_pattern("frame", ".png"), fps, options.animation);
     fmt::print("  animation        {} ({} frames at {:g} per second)\n", options.animation.string(), summary.frames, fps);
   }

@@ -199,7 +199,10 @@ struct Scene {
   /// Where pictures of the frames look (for a renderer; the scene does not draw).
   std::optional<Box> picture_box;
   double picture_azimuth = 35, picture_elevation = 25, picture_zoom = 1;
-  int picture_width = 640, picture_height = 480;
+  /// VGA unless the scene says: small enough for a software renderer to draw every frame of a
+  /// run in a fraction of its step time, large enough to see the cuts.
+  static constexpr int kDefaultPictureWidth = 640, kDefaultPictureHeight = 480;
+  int picture_width = kDefaultPictureWidth, picture_height = kDefaultPictureHeight;
 };
 
 /// Reads and validates a scene. Throws Error(kInvalidInput) naming the file and the key path

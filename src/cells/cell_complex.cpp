@@ -727,7 +727,10 @@ void CellComplex::insert_triangles(std::span<const PreparedTriangle> triangles, 
       }
     }
   }
-  const double side = 5 * longest_edge_ * (1 + 1e-9);
+  // A hair over 5 L: L is a computed norm, perhaps a rounding under the longest edge, and the
+  // header's argument holds for blocks of at least 5 true L.
+  constexpr double kBlockSideSlack = 1 + 1e-9;
+  const double side = 5 * longest_edge_ * kBlockSideSlack;
   const Vec3 origin = x.colwise().minCoeff().transpose();
   struct Pair {
     std::int32_t triangle;

@@ -553,12 +553,13 @@ class SceneRunner {
       write_tet_mesh(directory_ / frame_file_name("mesh", frame, ".vtu"), r.mesh.mesh, mesh_fields_);
     }
     if (options_.check_intersections) {
-      // A cut counts as opened where its sides are more than 1e-6 of the mesh apart: less is the
-      // solver's noise (a converged step settles positions to 1e-7 of the mesh's size). With
+      // A cut counts as opened where its sides are more than kSolverNoise of the mesh apart: less
+      // is the solver's noise (a converged step settles positions to 1e-7 of the mesh's size). With
       // surface contact, the sides of a fresh cut pressed together may go into each other by up
       // to its allowance (a hundredth of an edge), and the cut has not opened there either.
       const Points& rest = session_.surface().surface.vertices;
-      const double noise = rest.rows() > 0 ? 1e-6 * (rest.colwise().maxCoeff() - rest.colwise().minCoeff()).norm() : 0.0;
+      constexpr double kSolverNoise = 1e-6;  // of the mesh's diagonal
+      const double noise = rest.rows() > 0 ? kSolverNoise * (rest.colwise().maxCoeff() - rest.colwise().minCoeff()).norm() : 0.0;
       const double opened = std::max(noise, session_.simulator().surface_contact().fresh_cut_allowance);
       const SurfaceIntersections found =
           count_surface_intersections(session_.surface(), session_.cutter().tet_nodes(), session_.surface_positions(), opened);

@@ -16,16 +16,16 @@
 
 #include "sim/block_sparse.hpp"
 #include "sim/cloth_energy.hpp"
+#include "sim/line_search.hpp"
 #include "util/stopwatch.hpp"
 
 namespace tetcut::sim {
 
 namespace {
-// Armijo's sufficient decrease, and halvings before the line search gives up.
-constexpr double kArmijo = 1e-4;
+using detail::kArmijo;
+using detail::kEnergyRounding;
+// Halvings of the step before the line search gives up.
 constexpr int kMaxHalvings = 30;
-// The relative rounding of a sum of many energy terms: decreases below it cannot be seen.
-constexpr double kEnergyRounding = 1e-13;
 
 // sum over free nodes of |g|^2 dt^2 / m: what a mass-only step would move, squared.
 double gradient_measure(const std::vector<double>& g, const std::vector<double>& weight) {

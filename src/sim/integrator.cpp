@@ -11,6 +11,7 @@
 #include <tetcut/error.hpp>
 #include <tetcut/sim.hpp>
 
+#include "sim/line_search.hpp"
 #include "sim/simulator_state.hpp"
 
 #include <chrono>
@@ -21,10 +22,8 @@
 namespace tetcut::sim {
 namespace {
 
-// Armijo's sufficient decrease: accept t when E(x + t d) <= E(x) - kArmijo t (-g . d).
-constexpr double kArmijo = 1e-4;
-// The relative rounding of a sum of many energy terms: decreases below it cannot be seen.
-constexpr double kEnergyRounding = 1e-13;
+using detail::kArmijo;
+using detail::kEnergyRounding;
 // Halvings of the step before the line search gives up (t = 2^-40: the limit of precision).
 constexpr int kMaxHalvings = 40;
 // The linear solve aims to leave a residual worth this share of the convergence threshold, so
