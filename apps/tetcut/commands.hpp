@@ -1,10 +1,10 @@
 #pragma once
-// Subcommands of the tetcut command-line tool. Each registers its options on the CLI11 app and
-// runs when selected; errors propagate as tetcut::Error and become messages and exit codes in main.
+// Subcommands of the tetcut command-line tool, one file each (<name>_command.cpp). Each registers
+// its options on the CLI11 app and runs when selected; errors propagate as tetcut::Error and become
+// messages and exit codes in main. What several share is in common.hpp and cut_report.hpp.
 
 #include <CLI/CLI.hpp>
 
-#include <filesystem>
 #include <functional>
 
 namespace tetcut::cli {
@@ -24,8 +24,5 @@ void add_view_command(CLI::App& app, Action& action);
 void add_demo_command(CLI::App& app, Action& action);
 void add_serve_command(CLI::App& app, Action& action);
 void add_cut2d_command(CLI::App& app, Action& action);
-
-/// Rejects an output path that names an input: writing would replace the data being read.
-void check_not_input(const std::filesystem::path& output, const std::filesystem::path& input);
 
 }  // namespace tetcut::cli

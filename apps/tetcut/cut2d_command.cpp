@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "commands.hpp"
+#include "common.hpp"
 
 namespace tetcut::cli {
 

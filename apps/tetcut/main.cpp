@@ -49,6 +49,10 @@ int main(int argc, char** argv) {
   try {
     return action();
   } catch (const tetcut::Error& e) {
+    if (e.kind() == tetcut::ErrorKind::kInternal) {
+      fmt::print(stderr, "tetcut: internal error: {}\n", e.what());
+      return kExitInternal;
+    }
     fmt::print(stderr, "tetcut: error: {}\n", e.what());
     return kExitBadInput;
   } catch (const std::exception& e) {

@@ -6,13 +6,13 @@
 
 #include <fmt/core.h>
 
-#include <chrono>
 #include <cstdio>
 #include <filesystem>
 #include <memory>
 #include <string_view>
 
 #include "commands.hpp"
+#include "common.hpp"
 
 namespace tetcut::cli {
 
@@ -40,7 +40,7 @@ void add_serve_command(CLI::App& app, Action& action) {
       if (!options->record.empty() && options->record.extension() != ".json") {
         throw Error(ErrorKind::kInvalidArgument, "the recording is a scene file: it must end in .json", options->record.string());
       }
-      const auto start = std::chrono::steady_clock::now();
+      const auto start = Clock::now();
       const Scene scene = options->scene.empty() ? parse_scene(kDefaultLiveScene, "default live scene (examples/live-femur.json)")
                                                  : load_scene(options->scene);
       LiveServerOptions server_options;
@@ -48,7 +48,7 @@ void add_serve_command(CLI::App& app, Action& action) {
       server_options.port = static_cast<std::uint16_t>(options->port);
       server_options.record = options->record;
       LiveServer server(scene, server_options);
-      const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      const double seconds = seconds_since(start);
       fmt::print("tetcut serve: {} ready in {:.1f} s\n  open {}\n  (Ctrl-C to stop{})\n",
                  options->scene.empty() ? std::string("the femur") : options->scene.string(), seconds, server.url(),
                  options->record.empty() ? "" : ", writing the recording to " + options->record.string());

@@ -15,26 +15,28 @@
 #include <tetcut/cutter.hpp>
 #include <tetcut/generators.hpp>
 
+#include <optional>
 #include <string>
+#include <string_view>
 
 namespace tetcut {
 
 /// What combinatorics says about a triangle surface, after welding vertices with identical
-/// coordinates. A surface is closed when every edge is used as often in one direction as in the
-/// other: then its winding number is defined everywhere off the surface, even where the surface
-/// touches or passes through itself.
+/// coordinates. A surface is balanced (SurfaceStats' word too) when every edge is used as often in
+/// one direction as in the other: closed and consistently oriented, so that its winding number is
+/// defined everywhere off the surface, even where the surface touches or passes through itself.
 struct SurfaceCheck {
   Index vertices = 0;              ///< distinct vertices after welding
   Index triangles = 0;
   Index degenerate_triangles = 0;  ///< zero area (collinear or repeated corners): skipped by the cut
   /// Edges used more often in one direction than the other: boundary edges (used once) and edges
   /// where neighbouring triangles disagree on orientation.
-  Index boundary_edges = 0;
+  Index unbalanced_edges = 0;
   Index misoriented_edges = 0;     ///< of those, edges used at least twice, all the same way
   Index nonmanifold_edges = 0;     ///< edges of more than two triangles (allowed when balanced)
   Index components = 0;            ///< connected through shared edges
 
-  bool closed() const { return boundary_edges == 0; }
+  bool balanced() const { return unbalanced_edges == 0; }
 };
 
 /// Checks a surface. Throws Error(kInvalidInput) naming the triangle when a corner is not finite
@@ -43,10 +45,15 @@ SurfaceCheck check_surface(const TriangleSurface& surface);
 
 /// Which material an embedding keeps.
 enum class KeepMaterial {
-  kInside,   ///< where the winding number of the (closed) surface is not zero
+  kInside,   ///< where the winding number of the (balanced) surface is not zero
   kLargest,  ///< the piece of largest volume after cutting the mesh by the surface
   kPoint,    ///< the piece holding EmbedOptions::point
 };
+
+/// The name scenes, the CLI and Python give each choice: "inside", "largest", "point".
+std::string_view keep_material_name(KeepMaterial keep);
+/// The choice keep_material_name calls `name`; nothing for any other word.
+std::optional<KeepMaterial> keep_material_from_name(std::string_view name);
 
 struct EmbedOptions {
   KeepMaterial keep = KeepMaterial::kInside;
@@ -64,7 +71,7 @@ struct EmbedReport {
 };
 
 /// Embeds `surface` in `mesh`: cuts the mesh by it and keeps the chosen material. For kInside
-/// the surface must be closed (Error(kInvalidInput) with the number of boundary edges otherwise);
+/// the surface must be balanced (Error(kInvalidInput) with the number of unbalanced edges otherwise);
 /// material is where its winding number is not zero, decided exactly, so a self-intersecting
 /// surface gives the union of what it encloses, and a polygon where two surface parts lie face to
 /// face with opposite orientation stays a cut. Surface parts outside the mesh are ignored. Throws

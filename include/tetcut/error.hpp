@@ -13,6 +13,9 @@ enum class ErrorKind {
   kIo,               ///< The file system refused: cannot open, read, write or rename.
   kUnsupported,      ///< Well-formed data in a variant we do not handle (e.g. binary Gmsh).
   kInvalidArgument,  ///< The caller passed a bad parameter (negative spacing, unknown extension).
+  /// A broken invariant inside the library: a bug, never the caller's fault (report it with the
+  /// input). The CLI exits with 1 for it, as for any unexpected failure.
+  kInternal,
 };
 
 class Error : public std::runtime_error {

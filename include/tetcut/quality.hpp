@@ -21,11 +21,15 @@ struct MeshQuality {
 /// Measures `mesh` in rest positions, or in current positions when `current` is true. O(V + T).
 MeshQuality measure_quality(const TetMesh& mesh, bool current = false);
 
+/// Measures of a triangle surface, its vertices taken as given (no welding; check_surface in
+/// embed.hpp welds). Two properties of its edges, distinct: `balanced` (the one cutting and
+/// embedding need: the winding number is defined) and `two_manifold`; the CLI's reports use the
+/// same names.
 struct SurfaceStats {
   Vec3 bbox_min = Vec3::Zero();
   Vec3 bbox_max = Vec3::Zero();
   double area = 0;
-  /// Volume enclosed, by the divergence theorem; meaningful when the surface is closed.
+  /// Volume enclosed, by the divergence theorem; meaningful when the surface is balanced.
   double enclosed_volume = 0;
   Index num_boundary_edges = 0;      ///< edges with one incident triangle
   Index num_nonmanifold_edges = 0;   ///< edges with three or more incident triangles
@@ -33,11 +37,13 @@ struct SurfaceStats {
   /// Edges not used equally often in each direction: boundary edges, and edges where the
   /// orientation of the incident triangles is inconsistent.
   Index num_unbalanced_edges = 0;
-  bool closed = false;               ///< every edge has exactly two incident triangles
+  /// Every edge has exactly two incident triangles: no boundary and no non-manifold edge
+  /// (orientation and vertices are not looked at).
+  bool two_manifold = false;
   /// Every edge is used as often in one direction as in the other: the surface is closed and
   /// consistently oriented, though it may be non-manifold (as a cut mesh's material surface may be
   /// where sheets touch). Implies an even number of triangles at every edge.
-  bool watertight = false;
+  bool balanced = false;
 };
 
 SurfaceStats measure_surface(const TriangleSurface& surface);

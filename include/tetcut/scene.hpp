@@ -199,7 +199,10 @@ struct Scene {
   /// Where pictures of the frames look (for a renderer; the scene does not draw).
   std::optional<Box> picture_box;
   double picture_azimuth = 35, picture_elevation = 25, picture_zoom = 1;
-  int picture_width = 640, picture_height = 480;
+  /// VGA unless the scene says: small enough for a software renderer to draw every frame of a
+  /// run in a fraction of its step time, large enough to see the cuts.
+  static constexpr int kDefaultPictureWidth = 640, kDefaultPictureHeight = 480;
+  int picture_width = kDefaultPictureWidth, picture_height = kDefaultPictureHeight;
 };
 
 /// Reads and validates a scene. Throws Error(kInvalidInput) naming the file and the key path
@@ -282,5 +285,12 @@ struct SceneSummary {
 /// writes mesh_NNNN.vtp (its triangle copies) and surface_NNNN.vtp (the material, the cells of
 /// the cut as triangles) where they are at each frame.
 SceneSummary run_scene(const Scene& scene, const std::filesystem::path& directory, const SceneRunOptions& options = {});
+
+/// The name of output frame `frame`'s file in a series: "<stem>_NNNN<extension>", four digits
+/// (mesh_0000.vtu, surface_0000.vtp, and tetcut sim's frame_0000.png). The one place these names
+/// are made.
+std::string frame_file_name(std::string_view stem, int frame, std::string_view extension);
+/// The same names as a printf pattern, "<stem>_%04d<extension>" (for ffmpeg: render::write_animation).
+std::string frame_file_pattern(std::string_view stem, std::string_view extension);
 
 }  // namespace tetcut

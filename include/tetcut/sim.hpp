@@ -33,6 +33,11 @@ enum class Model {
 struct Lame {
   double mu = 0, lambda = 0;
 };
+/// Whether `nu` is a Poisson's ratio of a stable isotropic material: strictly between -1 (where the
+/// shear modulus E / (2 (1 + nu)) is unbounded) and 1/2 (incompressible: lambda is unbounded). The
+/// one check of the range, for the tet material (lame_parameters), the cloth's and scene files.
+constexpr bool valid_poissons_ratio(double nu) { return nu > -1 && nu < 0.5; }
+
 /// From Young's modulus E > 0 and Poisson's ratio -1 < nu < 0.5; Error(kInvalidArgument) otherwise.
 Lame lame_parameters(double youngs_modulus, double poissons_ratio);
 /// The parameters a model's energy uses so that its small-strain behaviour is that of linear

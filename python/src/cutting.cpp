@@ -15,9 +15,7 @@ namespace tetcut::python {
 namespace {
 
 KeepMaterial keep_of(const std::string& keep) {
-  if (keep == "inside") return KeepMaterial::kInside;
-  if (keep == "largest") return KeepMaterial::kLargest;
-  if (keep == "point") return KeepMaterial::kPoint;
+  if (const std::optional<KeepMaterial> known = keep_material_from_name(keep)) return *known;
   throw py::value_error("keep must be 'inside', 'largest' or 'point', not '" + keep + "'");
 }
 

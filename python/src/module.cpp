@@ -22,6 +22,7 @@ const char* kind_name(ErrorKind kind) {
     case ErrorKind::kIo: return "io";
     case ErrorKind::kUnsupported: return "unsupported";
     case ErrorKind::kInvalidArgument: return "invalid_argument";
+    case ErrorKind::kInternal: return "internal";
   }
   return "unknown";
 }
@@ -32,7 +33,7 @@ Box box_of(py::handle min, py::handle max) { return Box{vec3(min, "box_min"), ve
 
 void bind_meshes(py::module_& m) {
   // tetcut.Error: what the library throws, with its kind ('invalid_input', 'io', 'unsupported',
-  // 'invalid_argument'), the file and line it names (or '' and 0), and the bare message.
+  // 'invalid_argument', 'internal': a bug), the file and line it names (or '' and 0), and the bare message.
   // Never destroyed: the interpreter may be gone by the time statics are.
   static auto* error_type = new py::exception<Error>(m, "Error");
   error_type->doc() = "An error from tetcut: attributes kind, message, file (or ''), line (or 0).";
@@ -135,8 +136,9 @@ void bind_meshes(py::module_& m) {
       .def_readonly("num_nonmanifold_edges", &SurfaceStats::num_nonmanifold_edges)
       .def_readonly("num_degenerate_triangles", &SurfaceStats::num_degenerate_triangles)
       .def_readonly("num_unbalanced_edges", &SurfaceStats::num_unbalanced_edges)
-      .def_readonly("closed", &SurfaceStats::closed)
-      .def_readonly("watertight", &SurfaceStats::watertight);
+      .def_readonly("two_manifold", &SurfaceStats::two_manifold, "Every edge has exactly two triangles.")
+      .def_readonly("balanced", &SurfaceStats::balanced,
+                    "Every edge is used as often in each direction: closed and consistently oriented.");
   m.def("measure_surface", [](py::handle V, py::handle F) { return measure_surface(surface_of(V, F)); }, py::arg("V"), py::arg("F"),
         "Area, enclosed volume and edge counts of the surface (V float64 (n, 3), F int32 (k, 3)).");
 
@@ -144,13 +146,14 @@ void bind_meshes(py::module_& m) {
       .def_readonly("vertices", &SurfaceCheck::vertices)
       .def_readonly("triangles", &SurfaceCheck::triangles)
       .def_readonly("degenerate_triangles", &SurfaceCheck::degenerate_triangles)
-      .def_readonly("boundary_edges", &SurfaceCheck::boundary_edges)
+      .def_readonly("unbalanced_edges", &SurfaceCheck::unbalanced_edges)
       .def_readonly("misoriented_edges", &SurfaceCheck::misoriented_edges)
       .def_readonly("nonmanifold_edges", &SurfaceCheck::nonmanifold_edges)
       .def_readonly("components", &SurfaceCheck::components)
-      .def_property_readonly("closed", &SurfaceCheck::closed);
+      .def_property_readonly("balanced", &SurfaceCheck::balanced,
+                             "Every edge is used as often in each direction (after welding): what embedding the inside needs.");
   m.def("check_surface", [](py::handle V, py::handle F) { return check_surface(surface_of(V, F)); }, py::arg("V"), py::arg("F"),
-        "Welds equal vertices and counts boundary, misoriented and non-manifold edges and components: what embed checks.");
+        "Welds equal vertices and counts unbalanced, misoriented and non-manifold edges and components: what embed checks.");
 }
 
 }  // namespace tetcut::python

@@ -1,11 +1,13 @@
 #include "cells/cell_complex.hpp"
 
+#include "mesh/local_index.hpp"
+#include "util/broken.hpp"
+
 #include <tetcut/error.hpp>
 
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <stdexcept>
 #include <unordered_map>
 
 #include <tbb/blocked_range.h>
@@ -15,20 +17,6 @@ namespace tetcut::cells {
 
 using geometry::Plane;
 using registry::OrientedPlane;
-
-namespace {
-
-[[noreturn]] void broken(const char* what) { throw std::logic_error(std::string("cell complex: ") + what); }
-
-// Local index (0-3) of `node` in tet row `tet`, or -1.
-int local_index(const Tets& tets, Index tet, Index node) {
-  for (int k = 0; k < 4; ++k) {
-    if (tets(tet, k) == node) return k;
-  }
-  return -1;
-}
-
-}  // namespace
 
 CellComplex::CellComplex(const TetMesh& mesh, registry::IntersectionRegistry& registry)
     : mesh_(&mesh),
@@ -114,7 +102,7 @@ void CellComplex::walk_mesh_edge(Index mesh_edge, VertexId start, VertexId targe
         break;
       }
     }
-    if (next < 0) broken("the edge records on a mesh edge do not form a path");
+    if (next < 0) broken("cell complex", "the edge records on a mesh edge do not form a path");
     visit(current, next);
     previous = current;
     current = edges_[next].a == current ? edges_[next].b : edges_[next].a;
@@ -208,7 +196,7 @@ CellId CellComplex::refine(Index tet) {
       } else if (facet.back == marker) {
         facet.back = cell;
       } else {
-        broken("a facet on a face of an unrefined tet does not refer to it");
+        broken("cell complex", "a facet on a face of an unrefined tet does not refer to it");
       }
       cells_[cell].facets.push_back(f);
     }
@@ -371,7 +359,7 @@ void CellComplex::insert_on_edge(EdgeId e, VertexId w) {
     auto& corners = facets_[f].corners;
     std::size_t i = 0;
     while (i < corners.size() && corners[i].edge != e) ++i;
-    if (i == corners.size()) broken("an edge lists a facet that does not use it");
+    if (i == corners.size()) broken("cell complex", "an edge lists a facet that does not use it");
     if (corners[i].vertex == a) {
       corners.insert(corners.begin() + static_cast<std::ptrdiff_t>(i + 1), Corner{w, second});
     } else {
@@ -399,7 +387,7 @@ FacetId CellComplex::split_facet(FacetId f, PlaneId plane, CellId cell, CellId n
     if (next > 0) rise = (rise == n) ? i : n + 1;
     if (next < 0) fall = (fall == n) ? i : n + 1;
   }
-  if (rise >= n || fall >= n) broken("a crossing facet does not meet the plane in exactly two vertices");
+  if (rise >= n || fall >= n) broken("cell complex", "a crossing facet does not meet the plane in exactly two vertices");
   const VertexId a = corners[rise].vertex, b = corners[fall].vertex;
   const EdgeId chord = add_edge(a, b, {facets_[f].plane, plane}, -1);
 
@@ -525,7 +513,7 @@ CellId CellComplex::split(CellId cell, PlaneId plane, FacetId* section) {
   // 4. Chain the section's edges into its cycle, from the first edge found (so that the cap's
   //    first corner follows the cell's facet order, not the numbering of points). Edges on the
   //    plane were seen from both of their facets, in the same direction; keep one copy.
-  if (section_edges.empty()) broken("the section of a split cell is empty");
+  if (section_edges.empty()) broken("cell complex", "the section of a split cell is empty");
   const VertexId start = section_edges.front().from;
   std::sort(section_edges.begin(), section_edges.end(),
             [](const Directed& x, const Directed& y) { return x.from < y.from || (x.from == y.from && x.edge < y.edge); });
@@ -533,7 +521,7 @@ CellId CellComplex::split(CellId cell, PlaneId plane, FacetId* section) {
                                   [](const Directed& x, const Directed& y) { return x.from == y.from && x.edge == y.edge; }),
                       section_edges.end());
   for (std::size_t i = 1; i < section_edges.size(); ++i) {
-    if (section_edges[i].from == section_edges[i - 1].from) broken("the section of a split cell branches");
+    if (section_edges[i].from == section_edges[i - 1].from) broken("cell complex", "the section of a split cell branches");
   }
   Facet cap;
   cap.plane = plane;
@@ -544,13 +532,13 @@ CellId CellComplex::split(CellId cell, PlaneId plane, FacetId* section) {
     const auto it = std::lower_bound(section_edges.begin(), section_edges.end(), v,
                                      [](const Directed& x, VertexId key) { return x.from < key; });
     if (it == section_edges.end() || it->from != v || cap.corners.size() >= section_edges.size()) {
-      broken("the section of a split cell is not one closed polygon");
+      broken("cell complex", "the section of a split cell is not one closed polygon");
     }
     cap.corners.push_back({v, it->edge});
     v = it->to;
   } while (v != start);
   if (cap.corners.size() != section_edges.size() || cap.corners.size() < 3) {
-    broken("the section of a split cell is not one closed polygon");
+    broken("cell complex", "the section of a split cell is not one closed polygon");
   }
   const FacetId cap_id = static_cast<FacetId>(facets_.push_back(std::move(cap)) - facets_.begin());
   for (const Corner& corner : facets_[cap_id].corners) edges_[corner.edge].facets.push_back(cap_id);
@@ -573,7 +561,7 @@ void CellComplex::cover(FacetId f) {
   // The facet lies on the plane (its corners do, exactly); only the orientation is left, the sign
   // of the two normals' dot product, which is far from zero for equal planes.
   const int alignment = facet.plane == plane.id ? 1 : registry_->normal_alignment(facet.plane, plane.id);
-  if (alignment == 0) broken("a covered facet is not on the cut plane");
+  if (alignment == 0) broken("cell complex", "a covered facet is not on the cut plane");
   facet.winding += alignment * plane.sign;
   touch_side(facet.front);
   touch_side(facet.back);
@@ -739,7 +727,10 @@ void CellComplex::insert_triangles(std::span<const PreparedTriangle> triangles, 
       }
     }
   }
-  const double side = 5 * longest_edge_ * (1 + 1e-9);
+  // A hair over 5 L: L is a computed norm, perhaps a rounding under the longest edge, and the
+  // header's argument holds for blocks of at least 5 true L.
+  constexpr double kBlockSideSlack = 1 + 1e-9;
+  const double side = 5 * longest_edge_ * kBlockSideSlack;
   const Vec3 origin = x.colwise().minCoeff().transpose();
   struct Pair {
     std::int32_t triangle;

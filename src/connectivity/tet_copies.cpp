@@ -1,26 +1,17 @@
 #include "connectivity/tet_copies.hpp"
 
+#include "mesh/local_index.hpp"
+#include "util/broken.hpp"
 #include "util/union_find.hpp"
 
 #include <algorithm>
 #include <numeric>
-#include <stdexcept>
 
 namespace tetcut::connectivity {
 namespace {
 
 using cells::CellComplex;
 using cells::Side;
-
-[[noreturn]] void broken(const char* what) { throw std::logic_error(std::string("tet copies: ") + what); }
-
-int local_index(const Tets& tets, Index tet, Index node) {
-  for (int k = 0; k < 4; ++k) {
-    if (tets(tet, k) == node) return k;
-  }
-  return -1;
-}
-
 
 // Calls join(copy_a, copy_b) for each pair of copies that face `face` joins: through each uncovered
 // facet with material on both sides, or through the whole face between two unrefined tets.
@@ -158,7 +149,7 @@ TetCopies::Update TetCopies::update(CellComplex& complex, const components::Mate
       if (k < 0) continue;
       Index& label = label_of[k];
       if (label < 0) label = complex.cells()[c].label;
-      if (label != complex.cells()[c].label) broken("a component holds material of two copies");
+      if (label != complex.cells()[c].label) broken("tet copies", "a component holds material of two copies");
     }
     std::vector<Index> copy_of_component(static_cast<std::size_t>(count));
     std::vector<Index> kept;
@@ -175,7 +166,7 @@ TetCopies::Update TetCopies::update(CellComplex& complex, const components::Mate
       update.new_copy_source.push_back(old);
       copy_of_component[k] = fresh;
     }
-    if (kept.size() != copies_of(tet).size()) broken("a copy lost all its material");
+    if (kept.size() != copies_of(tet).size()) broken("tet copies", "a copy lost all its material");
     for (cells::CellId c = complex.first_cell(tet); c >= 0; c = complex.cells()[c].next_in_tet) {
       const std::int32_t k = components.cell_component[c];
       if (k >= 0) complex.set_cell_label(c, static_cast<std::int32_t>(copy_of_component[k]));
@@ -220,7 +211,7 @@ void TetCopies::recollapse(const CellComplex& complex, Index node, Update* updat
     for (std::size_t s = 0; s < slots.size(); ++s) {
       if (slots[s].copy == copy) return static_cast<Index>(s);
     }
-    broken("a joined copy is not around the node");
+    broken("tet copies", "a joined copy is not around the node");
   };
   UnionFind classes(slots.size());
   std::vector<Index> faces;

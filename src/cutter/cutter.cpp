@@ -193,8 +193,11 @@ Points Cutter::to_rest(const Points& world) const {
           best_weights = weights;
         }
       }
-      // Grow the box: by the size of the mesh's boxes nearby, doubling.
-      reach = reach == 0 ? 1e-3 * (1 + p.cwiseAbs().maxCoeff()) : 2 * reach;
+      // Grow the box: by the size of the mesh's boxes nearby, doubling. The first reach is a
+      // thousandth of the point's magnitude (of 1 near the origin): under the size of any tet a
+      // mesh at that place would be cut into, and 64 doublings reach past any mesh.
+      constexpr double kFirstReach = 1e-3;
+      reach = reach == 0 ? kFirstReach * (1 + p.cwiseAbs().maxCoeff()) : 2 * reach;
       box.min = p - Vec3::Constant(reach);
       box.max = p + Vec3::Constant(reach);
     }

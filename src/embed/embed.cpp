@@ -31,14 +31,39 @@ void keep_piece(cells::CellComplex& complex, const connectivity::TetCopies& copi
 
 }  // namespace
 
+namespace {
+
+struct KeepName {
+  KeepMaterial keep;
+  std::string_view name;
+};
+constexpr KeepName kKeepNames[] = {
+    {KeepMaterial::kInside, "inside"}, {KeepMaterial::kLargest, "largest"}, {KeepMaterial::kPoint, "point"}};
+
+}  // namespace
+
+std::string_view keep_material_name(KeepMaterial keep) {
+  for (const KeepName& k : kKeepNames) {
+    if (k.keep == keep) return k.name;
+  }
+  return "unknown";
+}
+
+std::optional<KeepMaterial> keep_material_from_name(std::string_view name) {
+  for (const KeepName& k : kKeepNames) {
+    if (k.name == name) return k.keep;
+  }
+  return std::nullopt;
+}
+
 Cutter embed(TetMesh mesh, const TriangleSurface& surface, const EmbedOptions& options, EmbedReport* report) {
   EmbedReport local;
   EmbedReport& r = report != nullptr ? *report : local;
   r = EmbedReport{};
   auto start = Clock::now();
   r.check = check_surface(surface);
-  if (options.keep == KeepMaterial::kInside && !r.check.closed()) {
-    std::string message = "the surface is not closed: " + std::to_string(r.check.boundary_edges) +
+  if (options.keep == KeepMaterial::kInside && !r.check.balanced()) {
+    std::string message = "the surface is not closed: " + std::to_string(r.check.unbalanced_edges) +
                           " edges are used more often in one direction than the other";
     if (r.check.misoriented_edges > 0) {
       message += " (" + std::to_string(r.check.misoriented_edges) + " of them where neighbouring triangles disagree on orientation)";

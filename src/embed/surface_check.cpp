@@ -82,7 +82,7 @@ SurfaceCheck check_surface(const TriangleSurface& surface) {
     const auto uses = static_cast<int>(end - begin);
     if (uses > 2) ++check.nonmanifold_edges;
     if (balance != 0) {
-      ++check.boundary_edges;
+      ++check.unbalanced_edges;
       if (uses >= 2 && std::abs(balance) == uses) ++check.misoriented_edges;
     }
     begin = end;

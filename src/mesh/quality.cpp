@@ -97,8 +97,8 @@ SurfaceStats measure_surface(const TriangleSurface& surface) {
     if (balance != 0) ++s.num_unbalanced_edges;
     i = j;
   }
-  s.closed = surface.num_triangles() > 0 && s.num_boundary_edges == 0 && s.num_nonmanifold_edges == 0;
-  s.watertight = surface.num_triangles() > 0 && s.num_unbalanced_edges == 0;
+  s.two_manifold = surface.num_triangles() > 0 && s.num_boundary_edges == 0 && s.num_nonmanifold_edges == 0;
+  s.balanced = surface.num_triangles() > 0 && s.num_unbalanced_edges == 0;
   return s;
 }
 

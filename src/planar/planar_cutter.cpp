@@ -23,6 +23,7 @@
 #include "planar/triangle_arrangement.hpp"
 #include "registry/plane_book.hpp"
 #include "spatial/box_tree.hpp"
+#include "util/broken.hpp"
 #include "util/union_find.hpp"
 
 namespace tetcut {
@@ -251,7 +252,7 @@ int PlanarCutter::State::compare_on_edge(Index edge, VertexId x, VertexId y) con
     if (at_first == 0) continue;  // the line runs along the edge; y's other line crosses it
     return registry.side(x, line) == at_first ? -1 : 1;
   }
-  throw std::logic_error("planar: a point on a mesh edge has no line crossing it");
+  broken("planar", "a point on a mesh edge has no line crossing it");
 }
 
 const std::vector<std::array<Index, 2>>& PlanarCutter::State::joins(Index edge) {
@@ -298,7 +299,7 @@ void PlanarCutter::State::update_copies(Index t, PlanarCutReport* report) {
   for (std::size_t f = 0; f < faces.size(); ++f) {
     const int c = face_component[f];
     if (component_label[c] >= 0 && component_label[c] != faces[f].label) {
-      throw std::logic_error("planar: a component spans two old copies");
+      broken("planar", "a component spans two old copies");
     }
     component_label[c] = faces[f].label;
     component_area[c] += arrangement.face_area(geometry.registry, static_cast<int>(f));

@@ -3,8 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <stdexcept>
 
+#include "util/broken.hpp"
 #include "util/union_find.hpp"
 
 namespace tetcut::planar {
@@ -234,7 +234,7 @@ bool TriangleArrangement::insert_into_face(PlanarGeometry& geometry, int face, c
       crossings[found++] = {i, false, wall_side};
     }
   }
-  if (found != 2) throw std::logic_error("planar: a line crossing a convex cell does not cross its boundary twice");
+  if (found != 2) broken("planar", "a line crossing a convex cell does not cross its boundary twice");
   const Ends ends = ends_between(geometry, segment.line, segment, crossings[0].wall_side, crossings[1].wall_side);
   if (!ends.overlaps) return false;
 
@@ -316,7 +316,7 @@ SideIntervals TriangleArrangement::side_intervals(int k) const {
     for (const std::int32_t h : on_side) {
       if (half_edges_[h].origin == v) piece = h;
     }
-    if (piece < 0) throw std::logic_error("planar: a triangle's side is not a chain of edges");
+    if (piece < 0) broken("planar", "a triangle's side is not a chain of edges");
     const HalfEdge& e = half_edges_[piece];
     out.points.push_back(v);
     out.labels.push_back(faces_[e.face].label);

@@ -1,8 +1,9 @@
 #include "registry/intersection_registry.hpp"
 
+#include "util/broken.hpp"
+
 #include <algorithm>
 #include <bit>
-#include <stdexcept>
 
 namespace tetcut::registry {
 
@@ -77,13 +78,13 @@ OrientedPlane IntersectionRegistry::wall(const Vec3& p, const Vec3& q, int axis,
   const auto [it, inserted] = walls_.try_emplace(key, num_planes());
   if (inserted) add_plane(Plane::wall(from, to, axis));
   const int side = geometry::side_of_point(planes_[it->second], inner);
-  if (side == 0) throw std::logic_error("registry: the inner point of a wall lies on it");
+  if (side == 0) broken("registry", "the inner point of a wall lies on it");
   return {it->second, side};
 }
 
 VertexId IntersectionRegistry::add_point(PlaneId a, PlaneId b, PlaneId c) {
   const int orientation = geometry::normal_determinant_sign(planes_[a], planes_[b], planes_[c]);
-  if (orientation == 0) throw std::logic_error("registry: three planes of a point do not meet in one point");
+  if (orientation == 0) broken("registry", "three planes of a point do not meet in one point");
   Vertex v;
   v.planes = {a, b, c};
   v.homogeneous = geometry::tpi_homogeneous(planes_[a], planes_[b], planes_[c]);
@@ -353,7 +354,7 @@ void IntersectionRegistry::begin_memo(std::initializer_list<PlaneId> planes) {
   memo.planes = {-1, -1, -1, -1};
   int slot = 0;
   for (const PlaneId p : planes) {
-    if (slot == 4) throw std::logic_error("registry: at most four memoised planes");
+    if (slot == 4) broken("registry", "at most four memoised planes");
     memo.planes[slot++] = p;
   }
   ++memo.stamp;

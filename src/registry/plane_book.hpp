@@ -82,9 +82,12 @@ class PlaneBook {
     Eigen::Vector4d c = plane.rounded();
     const double n = c.head<3>().norm();
     if (n > 0) c /= n;
-    // One orientation for both: the first clearly non-zero coefficient positive.
+    // One orientation for both: the first clearly non-zero coefficient positive. "Clearly": far
+    // above the rounding of normalised coefficients, so that two representations of one plane
+    // pick the same one (one that straddles the threshold only misses a sharing).
+    constexpr double kClearlyNonZero = 1e-6;
     for (int k = 0; k < 4; ++k) {
-      if (std::abs(c[k]) > 1e-6) {
+      if (std::abs(c[k]) > kClearlyNonZero) {
         if (c[k] < 0) c = -c;
         break;
       }

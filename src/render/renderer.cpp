@@ -8,6 +8,7 @@
 #include <EGL/eglext.h>
 #include <GLES3/gl3.h>
 
+#include "util/broken.hpp"
 #include "util/union_find.hpp"
 
 #include <algorithm>
@@ -18,6 +19,17 @@
 
 namespace tetcut::render {
 namespace {
+
+// The camera. The vertical (or, for a tall picture, horizontal) field of view, in degrees.
+constexpr double kFieldOfViewDegrees = 30;
+// A scene of one point still has a size to frame (any positive radius frames it alike).
+constexpr double kMinRadius = 1e-12;
+// A zoom of zero would put the eye at infinity; the CLI and scenes refuse it, this keeps the
+// library's own arithmetic finite.
+constexpr double kMinZoom = 1e-6;
+// The near plane is at least this share of the eye's distance: zoomed inside the scene's sphere,
+// the depth buffer keeps 24 bits over a range of at most 1000 : 1.
+constexpr double kMinNearShare = 1e-3;
 
 using Mat4 = Eigen::Matrix4f;
 using Vec3f = Eigen::Vector3f;
@@ -112,7 +124,7 @@ GLuint compile(GLenum kind, const char* source) {
   if (!ok) {
     char log[1024];
     glGetShaderInfoLog(shader, sizeof log, nullptr, log);
-    throw std::logic_error(std::string("render: shader does not compile: ") + log);
+    broken("render", std::string("shader does not compile: ") + log);
   }
   return shader;
 }
@@ -206,18 +218,18 @@ Image render(const TriangleSurface& surface, const RenderOptions& options) {
   }
   if (box.isEmpty()) box.extend(Vec3::Zero());
   const Vec3 centre = box.center();
-  const double radius = std::max(0.5 * box.diagonal().norm(), 1e-12);
+  const double radius = std::max(0.5 * box.diagonal().norm(), kMinRadius);
   const double azimuth = options.camera.azimuth_degrees * std::numbers::pi / 180;
   const double elevation = std::clamp(options.camera.elevation_degrees, -89.0, 89.0) * std::numbers::pi / 180;
   const Vec3 direction(std::cos(elevation) * std::cos(azimuth), std::cos(elevation) * std::sin(azimuth), std::sin(elevation));
   const double aspect = static_cast<double>(options.width) / options.height;
-  const double fov = 30 * std::numbers::pi / 180;
+  const double fov = kFieldOfViewDegrees * std::numbers::pi / 180;
   const double half_view = std::atan(std::tan(fov / 2) * std::min(aspect, 1.0));  // the narrower half-angle
-  const double distance = radius / std::sin(half_view) / std::max(options.camera.zoom, 1e-6);
+  const double distance = radius / std::sin(half_view) / std::max(options.camera.zoom, kMinZoom);
   const Vec3 eye = centre + distance * direction;
   const Mat4 view = look_at(eye.cast<float>(), centre.cast<float>(), Vec3f(0, 0, 1));
   const Mat4 projection = perspective(static_cast<float>(fov), static_cast<float>(aspect),
-                                      static_cast<float>(std::max(distance - 1.5 * radius, 1e-3 * distance)),
+                                      static_cast<float>(std::max(distance - 1.5 * radius, kMinNearShare * distance)),
                                       static_cast<float>(distance + 1.5 * radius));
 
   Context context;

@@ -48,7 +48,9 @@ nlohmann::json quantised(const Points& points) {
     low = points.colwise().minCoeff().transpose();
     high = points.colwise().maxCoeff().transpose();
   }
-  const Vec3 step = ((high - low) / 65535.0).cwiseMax(Vec3::Constant(1e-300));
+  // A flat or empty axis has no extent to divide: any positive step quantises it to 0.
+  constexpr double kFlatStep = 1e-300;
+  const Vec3 step = ((high - low) / 65535.0).cwiseMax(Vec3::Constant(kFlatStep));
   Eigen::Matrix<std::uint16_t, Eigen::Dynamic, 3, Eigen::RowMajor> q(points.rows(), 3);
   for (Index v = 0; v < points.rows(); ++v) {
     for (int c = 0; c < 3; ++c) {

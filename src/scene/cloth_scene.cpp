@@ -34,6 +34,7 @@ PlanarMesh load_cloth_mesh(const Value& mesh, const std::filesystem::path& sourc
       const PlanarCutter check(planar);  // counter-clockwise, edges of at most two triangles
       return planar;
     } catch (const Error& e) {
+      if (e.kind() == ErrorKind::kInternal) throw;  // a bug, not a fault of the scene
       file->fail(path.string() + ": " + e.message());
     }
   }
@@ -61,7 +62,7 @@ sim::ClothMaterial load_cloth_material(const Value& material) {
   if (const auto v = material.get("stretch_stiffness")) m.stretch_stiffness = v->positive();
   if (const auto v = material.get("poisson_ratio")) {
     m.poisson_ratio = v->number();
-    if (!(m.poisson_ratio > -1 && m.poisson_ratio < 0.5)) v->fail("must lie strictly between -1 and 0.5");
+    if (!sim::valid_poissons_ratio(m.poisson_ratio)) v->fail("must lie strictly between -1 and 0.5");
   }
   if (const auto v = material.get("bending_stiffness")) m.bending_stiffness = v->non_negative();
   if (const auto v = material.get("mass_damping")) m.mass_damping = v->non_negative();
@@ -159,6 +160,7 @@ ClothCut load_cloth_cut(const Value& cut, const std::filesystem::path& source, c
     try {
       path = spiral(to_plane(centre, plane).row(0).transpose(), spiral_cut->at("outer_radius").positive(), inner, spacing, step);
     } catch (const Error& e) {
+      if (e.kind() == ErrorKind::kInternal) throw;  // a bug, not a fault of the scene
       spiral_cut->fail(e.message());
     }
     if (const auto from = spiral_cut->get("from")) {
@@ -372,16 +374,13 @@ class ClothRunner {
     const auto start = Clock::now();
     const int frame = frames_.next();
     const Points& nodes = sim_.positions();
-    char name[64];
     if (scene_.write_mesh) {
-      std::snprintf(name, sizeof name, "mesh_%04d.vtp", frame);
-      write_surface(directory_ / name, TriangleSurface{nodes, result_.mesh.mesh.triangles});
+      write_surface(directory_ / frame_file_name("mesh", frame, ".vtp"), TriangleSurface{nodes, result_.mesh.mesh.triangles});
     }
     if (scene_.write_surface || options_.frame_surface) {
       SceneFrame shown;
       shown.surface = TriangleSurface{result_.material.positions(result_.mesh, nodes), result_.material.triangles};
-      std::snprintf(name, sizeof name, "surface_%04d.vtp", frame);
-      if (scene_.write_surface) write_surface(directory_ / name, shown.surface);
+      if (scene_.write_surface) write_surface(directory_ / frame_file_name("surface", frame, ".vtp"), shown.surface);
       if (options_.frame_surface) {
         shown.line_points = nodes;
         shown.lines = triangle_edges(result_.mesh.mesh.triangles);

@@ -28,6 +28,10 @@
 namespace tetcut {
 namespace {
 
+// Output frames are numbered with four digits, so that file names sort in frame order up to 10,000
+// frames (frame_file_name; more still work, sorted by ParaView's .pvd series).
+constexpr const char* kFrameNumber = "%04d";
+
 using Json = nlohmann::json;
 using scene::percentile;
 using scene::relative_to;
@@ -221,11 +225,7 @@ namespace {
 void write_frame_series(const std::filesystem::path& path, const std::string& prefix, const std::string& extension,
                         const std::vector<double>& times) {
   std::vector<SeriesEntry> entries;
-  for (std::size_t f = 0; f < times.size(); ++f) {
-    char name[64];
-    std::snprintf(name, sizeof name, "%s_%04zu%s", prefix.c_str(), f, extension.c_str());
-    entries.push_back({times[f], name});
-  }
+  for (std::size_t f = 0; f < times.size(); ++f) entries.push_back({times[f], frame_file_name(prefix, static_cast<int>(f), extension)});
   write_series(path, entries);
 }
 }  // namespace
@@ -318,7 +318,7 @@ Scene parse_scene(std::string_view text, const std::filesystem::path& path) {
       scene.embed_surface = read_surface(relative_to(path, embed->at("surface").string()));
     }
     if (const auto keep = embed->get("keep")) {
-      scene.embed_options.keep = keep->choice({"inside", "largest"}) == "inside" ? KeepMaterial::kInside : KeepMaterial::kLargest;
+      scene.embed_options.keep = *keep_material_from_name(keep->choice({"inside", "largest"}));
     }
   }
   if (const auto mesh = root.get("mesh")) {
@@ -342,7 +342,7 @@ Scene parse_scene(std::string_view text, const std::filesystem::path& path) {
     if (const auto v = material->get("youngs_modulus")) m.youngs_modulus = v->positive();
     if (const auto v = material->get("poissons_ratio")) {
       m.poissons_ratio = v->number();
-      if (!(m.poissons_ratio > -1 && m.poissons_ratio < 0.5)) v->fail("must lie strictly between -1 and 0.5");
+      if (!sim::valid_poissons_ratio(m.poissons_ratio)) v->fail("must lie strictly between -1 and 0.5");
     }
     if (const auto v = material->get("density")) m.density = v->positive();
     if (const auto v = material->get("mass_damping")) m.mass_damping = v->non_negative();
@@ -538,7 +538,6 @@ class SceneRunner {
   void write_frame(double time) {
     const auto start = Clock::now();
     const int frame = frames_.next();
-    char name[64];
     if (scene_.write_mesh) {
       CutResult& r = session_.result();
       if (fields_for_cut_ != session_.cuts_applied() || frame == 0) {
@@ -551,16 +550,16 @@ class SceneRunner {
         fields_for_cut_ = session_.cuts_applied();
       }
       r.mesh.mesh.set_current(session_.simulator().positions());
-      std::snprintf(name, sizeof name, "mesh_%04d.vtu", frame);
-      write_tet_mesh(directory_ / name, r.mesh.mesh, mesh_fields_);
+      write_tet_mesh(directory_ / frame_file_name("mesh", frame, ".vtu"), r.mesh.mesh, mesh_fields_);
     }
     if (options_.check_intersections) {
-      // A cut counts as opened where its sides are more than 1e-6 of the mesh apart: less is the
-      // solver's noise (a converged step settles positions to 1e-7 of the mesh's size). With
+      // A cut counts as opened where its sides are more than kSolverNoise of the mesh apart: less
+      // is the solver's noise (a converged step settles positions to 1e-7 of the mesh's size). With
       // surface contact, the sides of a fresh cut pressed together may go into each other by up
       // to its allowance (a hundredth of an edge), and the cut has not opened there either.
       const Points& rest = session_.surface().surface.vertices;
-      const double noise = rest.rows() > 0 ? 1e-6 * (rest.colwise().maxCoeff() - rest.colwise().minCoeff()).norm() : 0.0;
+      constexpr double kSolverNoise = 1e-6;  // of the mesh's diagonal
+      const double noise = rest.rows() > 0 ? kSolverNoise * (rest.colwise().maxCoeff() - rest.colwise().minCoeff()).norm() : 0.0;
       const double opened = std::max(noise, session_.simulator().surface_contact().fresh_cut_allowance);
       const SurfaceIntersections found =
           count_surface_intersections(session_.surface(), session_.cutter().tet_nodes(), session_.surface_positions(), opened);
@@ -570,8 +569,7 @@ class SceneRunner {
     if (scene_.write_surface || options_.frame_surface) {
       TriangleSurface moved = session_.surface().surface;
       moved.vertices = session_.surface_positions();
-      std::snprintf(name, sizeof name, "surface_%04d.vtp", frame);
-      if (scene_.write_surface) write_surface(directory_ / name, moved);
+      if (scene_.write_surface) write_surface(directory_ / frame_file_name("surface", frame, ".vtp"), moved);
       if (options_.frame_surface) {
         SceneFrame shown;
         shown.surface = std::move(moved);
@@ -629,6 +627,16 @@ class SceneRunner {
 };
 
 }  // namespace
+
+std::string frame_file_name(std::string_view stem, int frame, std::string_view extension) {
+  char digits[16];
+  std::snprintf(digits, sizeof digits, kFrameNumber, frame);
+  return std::string(stem) + "_" + digits + std::string(extension);
+}
+
+std::string frame_file_pattern(std::string_view stem, std::string_view extension) {
+  return std::string(stem) + "_" + kFrameNumber + std::string(extension);
+}
 
 SceneSummary run_scene(const Scene& scene, const std::filesystem::path& directory, const SceneRunOptions& options) {
   if (scene.cloth) return scene::run_cloth_scene(scene, directory, options);

@@ -224,7 +224,9 @@ std::string encode_frame(std::uint32_t version, std::uint32_t step, double time,
     for (int c = 0; c < 3; ++c) {
       const bool empty = !(low[p][c] <= high[p][c]);
       box[p][c] = empty ? 0.0f : static_cast<float>(low[p][c]);
-      box[p][3 + c] = empty ? 1.0f : std::max(static_cast<float>((high[p][c] - box[p][c]) / 65535.0), 1e-30f);
+      // A flat axis has no extent to divide: any positive step (in float) quantises it to 0.
+      constexpr float kFlatStep = 1e-30f;
+      box[p][3 + c] = empty ? 1.0f : std::max(static_cast<float>((high[p][c] - box[p][c]) / 65535.0), kFlatStep);
     }
     for (const float v : box[p]) put(out, v);
   }

@@ -308,7 +308,7 @@ struct LiveServer::Impl {
       // A frame for each step, and for commands while paused (a pin, a reset); a cut sent its own.
       if (due || (paused && changed && !topology)) publish(nullptr);
       blade_received.reset();
-      const double window = std::chrono::duration<double>(Clock::now() - window_start).count();
+      const double window = seconds_since(window_start);
       if (window >= kStatsSeconds || topology || changed) {
         if (window >= kStatsSeconds) {
           figures.steps_per_second = window_steps / window;
@@ -415,6 +415,7 @@ class LiveServer::Impl::Page : public std::enable_shared_from_this<Page> {
       }
       server_.command(weak_from_this(), std::move(command), Clock::now());
     } catch (const Error& e) {
+      if (e.kind() == ErrorKind::kInternal) throw;  // a bug, not a message to refuse
       server_.log("page " + std::to_string(id_) + ": refused a message (" + std::to_string(message.size()) + " bytes): " + e.what());
       text(live::error_message(e.what(), seq));
     }
@@ -521,6 +522,7 @@ void LiveServer::Impl::command(const std::weak_ptr<Page>& page, live::ClientComm
         }
       }
     } catch (const Error& e) {
+      if (e.kind() == ErrorKind::kInternal) throw;  // a bug, not an event to refuse
       log(std::string("refused an event: ") + e.what());
       reply(page, live::error_message(e.what(), command.seq));
     }

@@ -19,6 +19,10 @@
 namespace tetcut {
 namespace {
 
+// Times are sums of steps, so a move meant to start at a step's time may be reached a rounding
+// early or late (seconds; far below any step): it starts at that step, not one later.
+constexpr double kTimeRounding = 1e-12;
+
 bool in_box(const Box& box, const Vec3& x) { return (x.array() >= box.min.array()).all() && (x.array() <= box.max.array()).all(); }
 
 // Closest point to p on triangle (a, b, c), as barycentric weights (Ericson, Real-Time Collision
@@ -293,7 +297,7 @@ struct Session::State {
       if (pinned[n]) continue;
       bool moved = false;
       for (const SceneMove& m : scene.moves) {
-        if (t + 1e-12 >= m.from && t < m.until && in_box(m.box, rest_of(n))) {
+        if (t + kTimeRounding >= m.from && t < m.until && in_box(m.box, rest_of(n))) {
           sim.move_to(n, sim.positions().row(n).transpose() + dt() * m.velocity);
           moved = true;
           break;

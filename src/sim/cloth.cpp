@@ -8,6 +8,7 @@
 
 #include <tetcut/cloth.hpp>
 #include <tetcut/error.hpp>
+#include <tetcut/sim.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -15,16 +16,16 @@
 
 #include "sim/block_sparse.hpp"
 #include "sim/cloth_energy.hpp"
+#include "sim/line_search.hpp"
 #include "util/stopwatch.hpp"
 
 namespace tetcut::sim {
 
 namespace {
-// Armijo's sufficient decrease, and halvings before the line search gives up.
-constexpr double kArmijo = 1e-4;
+using detail::kArmijo;
+using detail::kEnergyRounding;
+// Halvings of the step before the line search gives up.
 constexpr int kMaxHalvings = 30;
-// The relative rounding of a sum of many energy terms: decreases below it cannot be seen.
-constexpr double kEnergyRounding = 1e-13;
 
 // sum over free nodes of |g|^2 dt^2 / m: what a mass-only step would move, squared.
 double gradient_measure(const std::vector<double>& g, const std::vector<double>& weight) {
@@ -189,7 +190,7 @@ ClothSimulator::ClothSimulator(const PlanarCutMesh& mesh, const Points& world, c
     : state_(std::make_unique<State>()) {
   State& s = *state_;
   if (!(material.density > 0) || !(material.stretch_stiffness > 0) || !(material.bending_stiffness >= 0) ||
-      !(material.poisson_ratio > -1 && material.poisson_ratio < 0.5) || !(material.mass_damping >= 0)) {
+      !valid_poissons_ratio(material.poisson_ratio) || !(material.mass_damping >= 0)) {
     throw Error(ErrorKind::kInvalidArgument,
                 "cloth material: density and stretch stiffness must be positive, bending stiffness and damping not "
                 "negative, and Poisson's ratio in (-1, 0.5)");

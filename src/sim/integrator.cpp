@@ -11,6 +11,7 @@
 #include <tetcut/error.hpp>
 #include <tetcut/sim.hpp>
 
+#include "sim/line_search.hpp"
 #include "sim/simulator_state.hpp"
 
 #include <chrono>
@@ -21,10 +22,8 @@
 namespace tetcut::sim {
 namespace {
 
-// Armijo's sufficient decrease: accept t when E(x + t d) <= E(x) - kArmijo t (-g . d).
-constexpr double kArmijo = 1e-4;
-// The relative rounding of a sum of many energy terms: decreases below it cannot be seen.
-constexpr double kEnergyRounding = 1e-13;
+using detail::kArmijo;
+using detail::kEnergyRounding;
 // Halvings of the step before the line search gives up (t = 2^-40: the limit of precision).
 constexpr int kMaxHalvings = 40;
 // The linear solve aims to leave a residual worth this share of the convergence threshold, so
@@ -162,34 +161,31 @@ struct Potential {
   }
 };
 
-}  // namespace
-
-StepReport Simulator::step(const StepOptions& options) { return minimise(options, true); }
-
-StepReport Simulator::solve_static(const StepOptions& options) {
-  StepReport report = minimise(options, false);
-  state_->v.setZero();
-  return report;
-}
-
-StepReport Simulator::minimise(const StepOptions& options, bool inertia) {
+// The options a step needs, checked before anything changes.
+void check_step_options(const StepOptions& options, bool inertia) {
   if (inertia && !(options.dt > 0 && std::isfinite(options.dt))) throw Error(ErrorKind::kInvalidArgument, "the time step must be positive");
   if (!(options.tolerance > 0) || !std::isfinite(options.tolerance)) throw Error(ErrorKind::kInvalidArgument, "the tolerance must be positive");
   if (options.max_newton_iterations < 1) throw Error(ErrorKind::kInvalidArgument, "at least one Newton iteration is needed");
   if (options.max_cg_iterations < 0) throw Error(ErrorKind::kInvalidArgument, "the conjugate gradient budget must not be negative");
   if (!options.gravity.allFinite()) throw Error(ErrorKind::kInvalidArgument, "gravity must be finite");
-  SimulatorState& s = *state_;
-  const Clock::time_point assemble_start = Clock::now();
+  if (options.reuse_hessian < 1) throw Error(ErrorKind::kInvalidArgument, "reuse_hessian must be at least 1");
+}
+
+// The matrix's pattern brought up to date with the mesh, in single precision when it is large
+// enough to be bound by memory.
+void prepare_matrix(SimulatorState& s, const StepOptions& options) {
   s.refresh_structure();
   const bool single = options.single_precision_matrix && s.hessian.num_blocks() > kSinglePrecisionBlocks;
   if (s.hessian.single_precision() != single) {
     s.hessian.set_single_precision(single);
     s.reusable = false;  // the values are gone
   }
-  const double h = inertia ? options.dt : 1.0;
-  const Index n = s.num_nodes();
-  const std::size_t size = 3 * static_cast<std::size_t>(n);
+}
 
+// The step's start: which nodes are free, the start and predicted positions, and the first guess
+// (the prediction, with constrained nodes at their targets).
+void start_step(SimulatorState& s, bool inertia, double h) {
+  const Index n = s.num_nodes();
   // Free nodes: not constrained, and holding mass (a node in no tet has no energy at all).
   s.free.resize(static_cast<std::size_t>(n));
   for (Index v = 0; v < n; ++v) s.free[v] = s.constraint[v] < 0 && s.mass[v] > 0;
@@ -200,100 +196,103 @@ StepReport Simulator::minimise(const StepOptions& options, bool inertia) {
   for (Index v = 0; v < n; ++v) {
     if (s.constraint[v] >= 0) x.row(v) = s.target.row(v);
   }
-  StepReport report;
-  // Friction against obstacles acts over this step with the contacts of its start (lagged).
+}
+
+// Friction (against obstacles, and of surface contact) acts over the step with the contacts of
+// its start (lagged). With surface contact the start is where no two parts of the surface touch;
+// the first guess may not go beyond where two would meet (the kinematic nodes then go only part
+// of the way this step).
+void lag_contact(SimulatorState& s, bool inertia, StepReport* report) {
   if (inertia) {
     s.lag_obstacle_friction();
   } else {
     s.obstacle_friction.clear();
   }
-  // With surface contact the start is where no two parts of the surface touch; the first guess
-  // may not go beyond where two would meet (the kinematic nodes then go only part of the way
-  // this step).
-  if (s.surface_contact.enabled()) {
-    const Clock::time_point contact_start = Clock::now();
-    // The two sides of fresh cuts are guarded against passing through each other over the step
-    // (first: the last step's joins measured what the guards need, at these positions).
-    s.surface_contact.lag_guards(s.start);
-    // Friction acts over this step with the normals and forces of its start (lagged).
-    // (A static solve has no step to slip over: none.)
-    if (inertia) {
-      s.surface_contact.lag_friction(s.start);
-    } else {
-      s.surface_contact.drop_friction();
-    }
-    s.displacement = x - s.start;
-    const double t = s.surface_contact.max_step(s.start, s.displacement.data());
-    if (t < 1) {
-      x = s.start + t * s.displacement;
-      ++report.contact_limited_steps;
-    }
-    report.contact_seconds += seconds_since(contact_start);
+  if (!s.surface_contact.enabled()) return;
+  const Clock::time_point contact_start = Clock::now();
+  Points& x = s.x;
+  // The two sides of fresh cuts are guarded against passing through each other over the step
+  // (first: the last step's joins measured what the guards need, at these positions).
+  s.surface_contact.lag_guards(s.start);
+  // Friction acts over this step with the normals and forces of its start (lagged).
+  // (A static solve has no step to slip over: none.)
+  if (inertia) {
+    s.surface_contact.lag_friction(s.start);
+  } else {
+    s.surface_contact.drop_friction();
   }
+  s.displacement = x - s.start;
+  const double t = s.surface_contact.max_step(s.start, s.displacement.data());
+  if (t < 1) {
+    x = s.start + t * s.displacement;
+    ++report->contact_limited_steps;
+  }
+  report->contact_seconds += seconds_since(contact_start);
+}
+
+// The potential of this step, its buffers sized and zeroed, and Rayleigh stiffness damping (which
+// uses the projected stiffness at the start of the step) set up.
+Potential step_potential(SimulatorState& s, const StepOptions& options, bool inertia, double h) {
+  const std::size_t size = 3 * static_cast<std::size_t>(s.num_nodes());
   Potential potential{s, inertia, h, options.gravity, inertia ? 1 / (h * h) + s.material.mass_damping / h : 0.0, 0.0, false};
   s.current_gradient.assign(size, 0.0);
   s.trial_gradient.assign(size, 0.0);
   s.direction.assign(size, 0.0);
   s.rhs.assign(size, 0.0);
-  s.weight.assign(static_cast<std::size_t>(n), 0.0);
-
-  // Rayleigh stiffness damping uses the (projected) stiffness at the start of the step.
+  s.weight.assign(static_cast<std::size_t>(s.num_nodes()), 0.0);
   if (inertia && s.material.stiffness_damping > 0) {
     s.assemble_hessian(s.start, &s.current_gradient);
     s.damping = s.hessian;
     potential.stiffness_damping = true;
     potential.damping_weight = s.material.stiffness_damping / h;
   }
+  return potential;
+}
 
+// The energy the tolerance is relative to: the kinetic energy scale M (size / h)^2 of a dynamic
+// step, the elastic scale mu V of a static solve.
+double energy_scale(const SimulatorState& s, bool inertia, double h) {
   double total_mass = s.mass.sum(), volume = 0;
   for (const SimulatorState::Element& e : s.elements) volume += e.volume;
-  const double scale = inertia ? total_mass * s.size * s.size / (h * h) : s.parameters.mu * volume;
-  const double threshold = options.tolerance * options.tolerance * scale;
-  // The bound of half the Newton decrement from a gradient: (1/2) sum |g_v|^2 / (w m_v).
-  for (Index v = 0; v < n; ++v) s.weight[v] = inertia && s.free[v] ? 1 / (potential.inertia_weight * s.mass[v]) : 0.0;
-  const auto decrement_bound = [&](const std::vector<double>& g) {
+  return inertia ? total_mass * s.size * s.size / (h * h) : s.parameters.mu * volume;
+}
+
+// The Newton iterations of one step: what their pieces share, and the pieces (the direction, the
+// line search, the measures of the gradient).
+struct Newton {
+  SimulatorState& s;
+  const StepOptions& options;
+  const Potential& potential;
+  StepReport& report;
+  bool inertia;
+  Index n;
+  std::size_t size;
+  double threshold;  // half the Newton decrement at which the step has converged
+
+  // Sets the bound of half the Newton decrement from a gradient, (1/2) sum |g_v|^2 / (w m_v):
+  // its weights 1 / (w m_v) over the free nodes of a dynamic step (none for a static solve).
+  void set_decrement_weights() const {
+    for (Index v = 0; v < n; ++v) s.weight[v] = inertia && s.free[v] ? 1 / (potential.inertia_weight * s.mass[v]) : 0.0;
+  }
+
+  double decrement_bound(const std::vector<double>& g) const {
     double bound = 0;
     for (Index v = 0; v < n; ++v) bound += s.weight[v] * (g[3 * v] * g[3 * v] + g[3 * v + 1] * g[3 * v + 1] + g[3 * v + 2] * g[3 * v + 2]);
     return 0.5 * bound;
-  };
+  }
 
   // The gradient's size where energies cannot tell: the bound of the decrement (dynamic steps)
   // or the plain squared norm over the free nodes (static solves).
-  const auto gradient_measure = [&](const std::vector<double>& g) {
+  double gradient_measure(const std::vector<double>& g) const {
     if (inertia) return decrement_bound(g);
     double sum = 0;
     for (std::size_t k = 0; k < size; ++k) sum += s.free[k / 3] ? g[k] * g[k] : 0.0;
     return sum;
-  };
-  if (options.reuse_hessian < 1) throw Error(ErrorKind::kInvalidArgument, "reuse_hessian must be at least 1");
-  // The first iteration may take the matrix of an earlier step (reuse_hessian), brought up to
-  // date: a cut's elements, the mass, contact and spring terms of now.
-  bool reused = inertia && s.reusable && s.reusable_age + 1 < options.reuse_hessian && !potential.stiffness_damping;
-  double energy;
-  if (reused) {
-    s.apply_cut_to_reused_matrix();
-    energy = potential.evaluate(x, &s.current_gradient);
-    potential.replace_recorded_terms(x);
-    ++s.reusable_age;
-  } else {
-    energy = potential.evaluate_with_hessian(x, &s.current_gradient);
   }
-  bool hessian_current = true, full_step = true;
-  // The best measure known of half the Newton decrement at x: the decrement itself when Newton
-  // stopped there without moving, the bound from the gradient after a move (dynamic steps).
-  double left = inertia ? decrement_bound(s.current_gradient) : 0.0;
-  report.assemble_seconds += seconds_since(assemble_start);
-  // The budget, and the iterations the safety valve may add to it (rescue_residual).
-  int iterations_allowed = options.max_newton_iterations;
-  const double rescue_bound = options.rescue_residual * options.rescue_residual * scale;
-  for (int iteration = 0; iteration < iterations_allowed; ++iteration) {
-    if (!hessian_current) {
-      const Clock::time_point t0 = Clock::now();
-      energy = potential.evaluate_with_hessian(x, &s.current_gradient);
-      report.assemble_seconds += seconds_since(t0);
-    }
-    hessian_current = false;
-    const bool matrix_reused = reused && iteration == 0;
+
+  // The Newton direction (into s.direction) from the matrix and the gradient at x; returns the
+  // decrement -g . d. After a shortened step (`full_step` false) the solve may be inexact.
+  double solve(bool full_step) const {
     const Clock::time_point solve_start = Clock::now();
     for (std::size_t k = 0; k < size; ++k) s.rhs[k] = s.free[k / 3] ? -s.current_gradient[k] : 0.0;
     std::fill(s.direction.begin(), s.direction.end(), 0.0);
@@ -319,22 +318,19 @@ StepReport Simulator::minimise(const StepOptions& options, bool inertia) {
     report.solve_seconds += seconds_since(solve_start);
     double decrement = 0;
     for (std::size_t k = 0; k < size; ++k) decrement += s.rhs[k] * s.direction[k];
-    report.newton_iterations = iteration + 1;
-    if (!(decrement >= 0) || !std::isfinite(decrement)) break;  // not a descent direction: give up
-    // With a reused matrix the decrement is not this step's Newton decrement: it does not end the
-    // step (the gradient bound after the step does).
-    if (!matrix_reused) left = decrement / 2;
-    if (decrement / 2 <= threshold && !matrix_reused) {
-      report.converged = true;
-      break;
-    }
-    // Backtracking (Armijo) on the potential, from the longest step that keeps the surface's
-    // parts apart.
-    double t = 1;
+    return decrement;
+  }
+
+  // Backtracking (Armijo) on the potential along s.direction, from the longest step that keeps
+  // the surface's parts apart. When a step is accepted, x, its gradient and `energy` move there.
+  // Returns whether one was, and the last step length tried in `t`.
+  bool line_search(double decrement, double* energy, double* t) const {
+    Points& x = s.x;
+    *t = 1;
     if (s.surface_contact.enabled()) {
       const Clock::time_point contact_start = Clock::now();
-      t = s.surface_contact.max_step(x, s.direction.data());
-      if (t < 1) ++report.contact_limited_steps;
+      *t = s.surface_contact.max_step(x, s.direction.data());
+      if (*t < 1) ++report.contact_limited_steps;
       report.contact_seconds += seconds_since(contact_start);
     }
     const Clock::time_point search_start = Clock::now();
@@ -343,30 +339,117 @@ StepReport Simulator::minimise(const StepOptions& options, bool inertia) {
       s.trial = x;
       for (Index v = 0; v < n; ++v) {
         if (!s.free[v]) continue;
-        for (int k = 0; k < 3; ++k) s.trial(v, k) += t * s.direction[3 * v + k];
+        for (int k = 0; k < 3; ++k) s.trial(v, k) += *t * s.direction[3 * v + k];
       }
       const double trial_energy = potential.evaluate(s.trial, &s.trial_gradient);
       // Near convergence the decrease Armijo asks for is below the rounding of the energy
       // itself; there the gradient decides (the bound of the decrement must fall).
-      const bool within_rounding = kArmijo * t * decrement <= kEnergyRounding * std::abs(energy);
-      const bool sufficient = trial_energy <= energy - kArmijo * t * decrement ||
+      const bool within_rounding = kArmijo * *t * decrement <= kEnergyRounding * std::abs(*energy);
+      const bool sufficient = trial_energy <= *energy - kArmijo * *t * decrement ||
                               (within_rounding && gradient_measure(s.trial_gradient) < gradient_measure(s.current_gradient));
       if (sufficient) {
         x.swap(s.trial);
         s.current_gradient.swap(s.trial_gradient);
-        energy = trial_energy;
+        *energy = trial_energy;
         accepted = true;
         break;
       }
-      t /= 2;
+      *t /= 2;
     }
-    full_step = t == 1;
     report.line_search_seconds += seconds_since(search_start);
+    return accepted;
+  }
+};
+
+// After the last iteration: surface contact's joins for the next step, the active pairs counted,
+// and the velocities of a dynamic step.
+void finish_step(SimulatorState& s, bool inertia, double h, StepReport* report) {
+  const Points& x = s.x;
+  if (s.surface_contact.enabled()) {
+    const Clock::time_point contact_start = Clock::now();
+    s.surface_contact.update_joins(x);
+    s.surface_contact.for_each_active(x, [&](const detail::ContactTerm&, double, const Vec3&, const Mat3&) { ++report->contact_pairs; });
+    report->contact_seconds += seconds_since(contact_start);
+  }
+  if (inertia) s.v = (x - s.start) / h;
+}
+
+}  // namespace
+
+StepReport Simulator::step(const StepOptions& options) { return minimise(options, true); }
+
+StepReport Simulator::solve_static(const StepOptions& options) {
+  StepReport report = minimise(options, false);
+  state_->v.setZero();
+  return report;
+}
+
+// Newton's method on the step's potential: the start and first guess, the first matrix (fresh,
+// or an earlier step's brought up to date), then iterations of direction, convergence test and
+// line search until the decrement, or its bound from the gradient, is below the threshold.
+StepReport Simulator::minimise(const StepOptions& options, bool inertia) {
+  check_step_options(options, inertia);
+  SimulatorState& s = *state_;
+  StepReport report;
+  const Clock::time_point assemble_start = Clock::now();
+  prepare_matrix(s, options);
+  const double h = inertia ? options.dt : 1.0;
+  start_step(s, inertia, h);
+  lag_contact(s, inertia, &report);
+  const Potential potential = step_potential(s, options, inertia, h);
+  const double scale = energy_scale(s, inertia, h);
+  Newton newton{s, options, potential, report, inertia, s.num_nodes(), 3 * static_cast<std::size_t>(s.num_nodes()),
+                options.tolerance * options.tolerance * scale};
+  newton.set_decrement_weights();
+
+  // The first iteration may take the matrix of an earlier step (reuse_hessian), brought up to
+  // date: a cut's elements, the mass, contact and spring terms of now.
+  Points& x = s.x;
+  const bool reused = inertia && s.reusable && s.reusable_age + 1 < options.reuse_hessian && !potential.stiffness_damping;
+  double energy;
+  if (reused) {
+    s.apply_cut_to_reused_matrix();
+    energy = potential.evaluate(x, &s.current_gradient);
+    potential.replace_recorded_terms(x);
+    ++s.reusable_age;
+  } else {
+    energy = potential.evaluate_with_hessian(x, &s.current_gradient);
+  }
+  bool hessian_current = true, full_step = true;
+  // The best measure known of half the Newton decrement at x: the decrement itself when Newton
+  // stopped there without moving, the bound from the gradient after a move (dynamic steps).
+  double left = inertia ? newton.decrement_bound(s.current_gradient) : 0.0;
+  report.assemble_seconds += seconds_since(assemble_start);
+
+  // The budget, and the iterations the safety valve may add to it (rescue_residual).
+  int iterations_allowed = options.max_newton_iterations;
+  const double rescue_bound = options.rescue_residual * options.rescue_residual * scale;
+  for (int iteration = 0; iteration < iterations_allowed; ++iteration) {
+    if (!hessian_current) {
+      const Clock::time_point t0 = Clock::now();
+      energy = potential.evaluate_with_hessian(x, &s.current_gradient);
+      report.assemble_seconds += seconds_since(t0);
+    }
+    hessian_current = false;
+    const bool matrix_reused = reused && iteration == 0;
+    const double decrement = newton.solve(full_step);
+    report.newton_iterations = iteration + 1;
+    if (!(decrement >= 0) || !std::isfinite(decrement)) break;  // not a descent direction: give up
+    // With a reused matrix the decrement is not this step's Newton decrement: it does not end the
+    // step (the gradient bound after the step does).
+    if (!matrix_reused) left = decrement / 2;
+    if (decrement / 2 <= newton.threshold && !matrix_reused) {
+      report.converged = true;
+      break;
+    }
+    double t = 1;
+    const bool accepted = newton.line_search(decrement, &energy, &t);
+    full_step = t == 1;
     if (!accepted && matrix_reused) continue;  // the old matrix's direction failed: a fresh one next
     if (!accepted) break;                      // at the limit of precision
     if (inertia) {
-      left = decrement_bound(s.current_gradient);
-      if (left <= threshold) {
+      left = newton.decrement_bound(s.current_gradient);
+      if (left <= newton.threshold) {
         report.converged = true;
         break;
       }
@@ -379,13 +462,7 @@ StepReport Simulator::minimise(const StepOptions& options, bool inertia) {
   }
   report.energy = energy;
   report.residual = std::sqrt(std::max(left, 0.0) / scale);
-  if (s.surface_contact.enabled()) {
-    const Clock::time_point contact_start = Clock::now();
-    s.surface_contact.update_joins(x);
-    s.surface_contact.for_each_active(x, [&](const detail::ContactTerm&, double, const Vec3&, const Mat3&) { ++report.contact_pairs; });
-    report.contact_seconds += seconds_since(contact_start);
-  }
-  if (inertia) s.v = (x - s.start) / h;
+  finish_step(s, inertia, h, &report);
   return report;
 }
 

@@ -45,7 +45,7 @@ Lame lame_parameters(double youngs_modulus, double poissons_ratio) {
   if (!(youngs_modulus > 0) || !std::isfinite(youngs_modulus)) {
     throw Error(ErrorKind::kInvalidArgument, "Young's modulus must be a positive number");
   }
-  if (!(poissons_ratio > -1 && poissons_ratio < 0.5)) {
+  if (!valid_poissons_ratio(poissons_ratio)) {
     throw Error(ErrorKind::kInvalidArgument, "Poisson's ratio must lie strictly between -1 and 0.5");
   }
   const double E = youngs_modulus, nu = poissons_ratio;

@@ -60,11 +60,11 @@ done
 expect_exit 0 "$TETCUT" convert cube.vtu skin.ply --binary
 expect_exit 0 "$TETCUT" info --json skin.ply
 cp out.txt skin.json
-json_check skin.json 'j["closed"] and j["triangles"] == 192 and abs(j["area"] - 6) < 1e-12 and abs(j["enclosed_volume"] - 1) < 1e-12'
+json_check skin.json 'j["balanced"] and j["two_manifold"] and j["triangles"] == 192 and abs(j["area"] - 6) < 1e-12 and abs(j["enclosed_volume"] - 1) < 1e-12'
 expect_exit 0 "$TETCUT" convert skin.ply skin.stl
 expect_exit 0 "$TETCUT" convert skin.stl skin.off
 expect_exit 0 "$TETCUT" info skin.off
-expect_stdout "closed           yes"
+expect_stdout "balanced         yes"
 
 # Bad input: message names file and line, exit 2, and the output is not created.
 printf 'MeshVersionFormatted 2\nDimension 3\nVertices\n2\n0 0 0 0\n1 nan 0 0\n' > bad.mesh
@@ -96,6 +96,6 @@ expect_exit 0 "$TETCUT" demo -o demo
 for f in figure4.vtu figure4_surface.obj figure4_report.json figure2.vtu figure2_surface.obj figure2_report.json; do
   [[ -s demo/$f ]] || fail "demo output $f missing"
 done
-json_check demo/figure4_report.json 'j["tets_in"] == 320 and j["pieces"] == 289 and j["surface"]["closed"]'
+json_check demo/figure4_report.json 'j["tets_in"] == 320 and j["pieces"] == 289 and j["surface"]["balanced"]'
 json_check demo/figure2_report.json 'j["tets_in"] == 1 and j["pieces"] > 1000 and abs(j["volume"] - 1 / 6) < 1e-12' 
 echo "cli_test: all checks passed"

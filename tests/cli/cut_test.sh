@@ -15,7 +15,7 @@ expect_stdout "pieces           4"
 json_check report.json 'j["nodes_in"] == 125 and j["tets_in"] == 320 and j["pieces"] == 4'
 json_check report.json 'j["tets_out"] > 320 and j["nodes_out"] > 125'
 json_check report.json 'all(abs(a - b) < 1e-12 for a, b in zip(j["piece_volumes"], [0.42, 0.28, 0.18, 0.12]))'
-json_check report.json 'abs(j["volume"] - 1) < 1e-12 and j["surface"]["closed"] and abs(j["surface"]["area"] - 10) < 1e-12'
+json_check report.json 'abs(j["volume"] - 1) < 1e-12 and j["surface"]["balanced"] and abs(j["surface"]["area"] - 10) < 1e-12'
 json_check report.json 'set(j["timings"]) == {"read", "cut", "surface", "write"} and all(t >= 0 for t in j["timings"].values())'
 # The outputs read back: the mesh with the reported counts, the surface closed with the same area.
 expect_exit 0 "$TETCUT" info --json cut.vtu
@@ -25,7 +25,7 @@ python_report() { "$PYTHON" -c "import json; print(json.load(open('report.json')
 json_check mesh.json "j['tets'] == $(python_report tets_out) and j['nodes'] == $(python_report nodes_out) and j['volume'] > 1"
 expect_exit 0 "$TETCUT" info --json cut.obj
 cp out.txt surface.json
-json_check surface.json 'j["closed"] and abs(j["area"] - 10) < 1e-12 and abs(j["enclosed_volume"] - 1) < 1e-12'
+json_check surface.json 'j["balanced"] and abs(j["area"] - 10) < 1e-12 and abs(j["enclosed_volume"] - 1) < 1e-12'
 # Per-copy fields for viewers, read by an independent reader.
 "$PYTHON" - cut.vtu <<'PY'
 import sys, meshio, numpy
@@ -72,7 +72,7 @@ expect_stdout "placed on the deformed mesh"
 json_check world.json 'j["world_space"] and j["pieces"] == 2 and abs(j["piece_volumes"][1] - 0.35) < 1e-12'
 expect_exit 0 "$TETCUT" info --json deformed.obj
 cp out.txt deformed.json
-json_check deformed.json 'j["closed"] and abs(j["area"] - (4 + 2 * 1.25 ** 0.5 + 2)) < 1e-12'
+json_check deformed.json 'j["balanced"] and abs(j["area"] - (4 + 2 * 1.25 ** 0.5 + 2)) < 1e-12'
 # Inverted tets are not cut there, with a warning; a deformed file of another mesh is an error.
 printf 'v -0.4 -1 -1\nv -0.4 3 -1\nv -0.4 3 3\nv -0.4 -1 3\nf 1 2 3\nf 1 3 4\n' > xm04.obj
 expect_exit 0 "$TETCUT" cut cube.vtu xm04.obj --deform mirrored.vtu --report mirrored.json

@@ -33,14 +33,14 @@ OBJ
 expect_exit 0 "$TETCUT" embed box.obj --cells 8 --out-mesh box.vtu --out-surface box_surface.obj --report box.json
 expect_stdout "pieces           1"
 expect_stdout "peak memory"
-json_check box.json 'j["pieces"] == 1 and abs(j["volume"] - 0.512) < 1e-12 and j["surface"]["closed"]'
+json_check box.json 'j["pieces"] == 1 and abs(j["volume"] - 0.512) < 1e-12 and j["surface"]["balanced"]'
 json_check box.json 'abs(j["surface"]["area"] - 6 * 0.64) < 1e-12 and j["tets_out"] < j["tets_in"]'
 json_check box.json 'set(j["timings"]) == {"read", "lattice", "check", "insert", "classify", "copies", "pieces", "surface", "write"}'
-json_check box.json 'j["peak_memory_bytes"] > 0 and j["embed"]["keep"] == "inside" and j["embed"]["surface_closed"]'
+json_check box.json 'j["peak_memory_bytes"] > 0 and j["embed"]["keep"] == "inside" and j["embed"]["surface_balanced"]'
 json_check box.json 'abs(j["lattice_spacing"] - 0.1) < 1e-12 and j["embed"]["tets_with_material"] == j["tets_out"]'
 # The written mesh holds only copies with material; the surface reads back closed.
 expect_exit 0 "$TETCUT" info --json box_surface.obj
-json_check out.txt 'j["closed"] and abs(j["enclosed_volume"] - 0.512) < 1e-12'
+json_check out.txt 'j["balanced"] and abs(j["enclosed_volume"] - 0.512) < 1e-12'
 "$PYTHON" - box.vtu <<'PY'
 import sys, meshio, numpy
 m = meshio.read(sys.argv[1])
@@ -61,7 +61,7 @@ grep -v '^f [56] ' box.obj > open.obj
 expect_exit 2 "$TETCUT" embed open.obj --cells 4
 expect_stderr "edges are used more often in one direction"
 expect_exit 0 "$TETCUT" embed open.obj --cells 8 --keep largest --report open.json
-json_check open.json 'j["pieces"] == 1 and j["embed"]["keep"] == "largest" and not j["embed"]["surface_closed"]'
+json_check open.json 'j["pieces"] == 1 and j["embed"]["keep"] == "largest" and not j["embed"]["surface_balanced"]'
 expect_exit 0 "$TETCUT" embed open.obj --cells 8 --keep point 0.5 0.5 0.5 --report point.json
 json_check point.json 'j["pieces"] == 1 and j["embed"]["keep"] == "point"'
 expect_exit 2 "$TETCUT" embed open.obj --cells 8 --keep point 0.5 0.5 0.1

@@ -111,7 +111,7 @@ for name, options in [("s.obj", dict(file_format="obj")), ("s.off", dict(file_fo
     assert got["triangles"] == len(skin), (name, got)
     # Binary STL stores single-precision floats.
     tolerance = 1e-6 if name == "s_bin.stl" else 1e-12
-    assert abs(got["area"] - area) < tolerance * area and got["closed"], (name, got)
+    assert abs(got["area"] - area) < tolerance * area and got["balanced"], (name, got)
     assert abs(got["enclosed_volume"] - volume) < tolerance, (name, got)
-    print(f"tetcut read meshio's {name}: {got['triangles']} triangles, closed, area {got['area']:.12g}")
+    print(f"tetcut read meshio's {name}: {got['triangles']} triangles, balanced, area {got['area']:.12g}")
 print("meshio cross-check passed")

@@ -68,7 +68,7 @@ TEST(Cutter, AMissedMeshIsUnchanged) {
   EXPECT_EQ(r.mesh.mesh.tets(), mesh.tets());
   expect_pieces(r, {1.0});
   const SurfaceStats s = measure_surface(r.surface.surface);
-  EXPECT_TRUE(s.closed);
+  EXPECT_TRUE(s.two_manifold);
   EXPECT_NEAR(s.area, 6.0, 1e-12);
 }
 

@@ -44,7 +44,7 @@ class ClosedScan : public ::testing::TestWithParam<const char*> {};
 TEST_P(ClosedScan, CutsTheBlockIntoInsideAndOutside) {
   const TriangleSurface surface = scan(GetParam());
   const SurfaceStats stats = measure_surface(surface);
-  ASSERT_TRUE(stats.closed);
+  ASSERT_TRUE(stats.two_manifold);
   const TetMesh mesh = block_around(surface, 16);
   const CutResult r = cut(mesh, surface);
   ASSERT_EQ(r.mesh.num_pieces(), 2);
@@ -64,7 +64,7 @@ TEST(OpenScan, LeavesOnePieceButBothSidesOnTheSurface) {
   // The lion head is open at the neck, so inside and outside stay connected through the hole.
   const TriangleSurface surface = scan("lion-head");
   const SurfaceStats stats = measure_surface(surface);
-  ASSERT_FALSE(stats.closed);
+  ASSERT_FALSE(stats.two_manifold);
   const TetMesh mesh = block_around(surface, 12);
   const CutResult r = cut(mesh, surface);
   EXPECT_EQ(r.mesh.num_pieces(), 1);

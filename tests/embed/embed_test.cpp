@@ -53,7 +53,7 @@ TEST(CheckSurface, CountsWeldsBoundariesAndOrientation) {
   const TriangleSurface box = box_surface(Box{Vec3::Zero(), Vec3::Ones()});
   SurfaceCheck c = check_surface(box);
   EXPECT_EQ(c.vertices, 8);
-  EXPECT_TRUE(c.closed());
+  EXPECT_TRUE(c.balanced());
   EXPECT_EQ(c.components, 1);
   EXPECT_EQ(c.nonmanifold_edges, 0);
   // As a soup (three vertices per triangle) it welds to the same surface.
@@ -65,23 +65,23 @@ TEST(CheckSurface, CountsWeldsBoundariesAndOrientation) {
   }
   c = check_surface(testing::soup(triangles));
   EXPECT_EQ(c.vertices, 8);
-  EXPECT_TRUE(c.closed());
+  EXPECT_TRUE(c.balanced());
   // One triangle dropped: its three edges are boundary edges.
   TriangleSurface open = box;
   open.triangles.conservativeResize(11, 3);
   c = check_surface(open);
-  EXPECT_EQ(c.boundary_edges, 3);
+  EXPECT_EQ(c.unbalanced_edges, 3);
   EXPECT_EQ(c.misoriented_edges, 0);
   // One triangle flipped: its edges each run twice the same way.
   TriangleSurface flipped = box;
   std::swap(flipped.triangles(0, 1), flipped.triangles(0, 2));
   c = check_surface(flipped);
-  EXPECT_EQ(c.boundary_edges, 3);
+  EXPECT_EQ(c.unbalanced_edges, 3);
   EXPECT_EQ(c.misoriented_edges, 3);
   // Two boxes sharing an edge: closed, one non-manifold edge, one component.
   const TriangleSurface two = concatenate(box, box_surface(Box{Vec3(1, 1, 0), Vec3(2, 2, 1)}));
   c = check_surface(two);
-  EXPECT_TRUE(c.closed());
+  EXPECT_TRUE(c.balanced());
   EXPECT_EQ(c.nonmanifold_edges, 1);
   EXPECT_EQ(c.components, 1);
   // A sliver with collinear corners counts as degenerate.
@@ -91,6 +91,15 @@ TEST(CheckSurface, CountsWeldsBoundariesAndOrientation) {
   sliver.triangles.resize(1, 3);
   sliver.triangles << 0, 1, 2;
   EXPECT_EQ(check_surface(sliver).degenerate_triangles, 1);
+}
+
+// Scenes, the CLI and Python name the choices of material alike, through one table.
+TEST(Embed, KeepMaterialNamesRoundTrip) {
+  for (const KeepMaterial keep : {KeepMaterial::kInside, KeepMaterial::kLargest, KeepMaterial::kPoint}) {
+    EXPECT_EQ(keep_material_from_name(keep_material_name(keep)), keep);
+  }
+  EXPECT_EQ(keep_material_name(KeepMaterial::kLargest), "largest");
+  EXPECT_FALSE(keep_material_from_name("outside").has_value());
 }
 
 TEST(CheckSurface, RejectsNanAndMissingVertices) {
@@ -202,7 +211,7 @@ TEST(Embed, OpenSurfaceNeedsAChoiceOfMaterial) {
   } catch (const Error& e) {
     EXPECT_EQ(e.kind(), ErrorKind::kInvalidInput);
     EXPECT_NE(e.message().find("not closed"), std::string::npos) << e.message();
-    EXPECT_NE(e.message().find(std::to_string(check_surface(open).boundary_edges) + " edges"), std::string::npos)
+    EXPECT_NE(e.message().find(std::to_string(check_surface(open).unbalanced_edges) + " edges"), std::string::npos)
         << e.message();
   }
 }
@@ -284,7 +293,7 @@ class EmbedScan : public ::testing::TestWithParam<const char*> {};
 TEST_P(EmbedScan, EnclosedVolumeAndAreaAreKept) {
   const TriangleSurface surface = scan(GetParam());
   const SurfaceCheck check = check_surface(surface);
-  ASSERT_TRUE(check.closed());
+  ASSERT_TRUE(check.balanced());
   const SurfaceStats stats = measure_surface(surface);
   Embedded e;
   e.lattice = embedding_lattice(surface, spacing_for_cubes(surface, 12));
@@ -304,7 +313,7 @@ TEST(EmbedScanOpen, FaceScanIsRefusedAsClosedAndKeptAsACut) {
   // face is a cut through it, both sides exposed.
   const TriangleSurface face = scan("nefertiti");
   const SurfaceCheck check = check_surface(face);
-  ASSERT_FALSE(check.closed());
+  ASSERT_FALSE(check.balanced());
   const TetMesh lattice = embedding_lattice(face, spacing_for_cubes(face, 8));
   EXPECT_THROW(embed(lattice, face), Error);
   EmbedOptions largest;

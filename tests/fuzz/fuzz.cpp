@@ -63,6 +63,7 @@ std::string try_read(const fs::path& path) {
     }
     return "";
   } catch (const Error& e) {
+    if (e.kind() == ErrorKind::kInternal) return std::string("an internal error (a bug): ") + e.what();
     if (std::string(e.what()).empty()) return "an error without a message";
     if (e.file().empty()) return std::string("an error that names no file: ") + e.what();
     return "";

@@ -42,7 +42,7 @@ TEST(Quality, SurfaceStatsOfAnOpenAndADegenerateSurface) {
   s.triangles.resize(2, 3);
   s.triangles << 0, 1, 2, 0, 1, 3;  // the second is degenerate (collinear)
   const SurfaceStats stats = measure_surface(s);
-  EXPECT_FALSE(stats.closed);
+  EXPECT_FALSE(stats.two_manifold);
   EXPECT_EQ(stats.num_degenerate_triangles, 1);
   EXPECT_EQ(stats.num_boundary_edges, 4);  // 1-2, 2-0, 1-3, 3-0; edge 0-1 is shared
   EXPECT_DOUBLE_EQ(stats.area, 0.5);

@@ -50,7 +50,7 @@ TEST(TetMesh, BoundarySurfaceIsClosedAndOutward) {
   const TriangleSurface surface = boundary_surface(mesh);
   EXPECT_EQ(surface.num_triangles(), 6);
   const SurfaceStats s = measure_surface(surface);
-  EXPECT_TRUE(s.closed);
+  EXPECT_TRUE(s.two_manifold);
   // Outward orientation makes the enclosed volume positive and equal to the mesh volume.
   EXPECT_DOUBLE_EQ(s.enclosed_volume, measure_quality(mesh).volume);
   EXPECT_GT(s.enclosed_volume, 0);

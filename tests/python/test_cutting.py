@@ -32,7 +32,7 @@ def test_figure4_cuts_the_cube_into_289_sticks():
     assert set(np.unique(result.tet_piece)) == set(range(289))
     # The material surface is closed, consistently oriented, and encloses the cube.
     stats = tetcut.measure_surface(result.surface.vertices, result.surface.triangles)
-    assert stats.watertight
+    assert stats.balanced
     assert stats.enclosed_volume == pytest.approx(1.0, rel=1e-12)
 
 
@@ -164,13 +164,13 @@ def test_embedding_a_real_scan(cgal_archive):
     spacing = tetcut.spacing_for_cubes(SV, SF, 12)
     V, T = tetcut.embedding_lattice(SV, SF, spacing)
     cutter, report = tetcut.embed(V, T, SV, SF)
-    assert report.check.closed and report.tets_in == len(T)
+    assert report.check.balanced and report.tets_in == len(T)
     assert 0 < report.tets_with_material < len(T)
     result = cutter.result()
     # The kept material is what the scan encloses, and its surface is closed.
     enclosed = tetcut.measure_surface(SV, SF).enclosed_volume
     assert result.piece_volumes.sum() == pytest.approx(enclosed, rel=1e-9)
-    assert tetcut.measure_surface(result.surface.vertices, result.surface.triangles).watertight
+    assert tetcut.measure_surface(result.surface.vertices, result.surface.triangles).balanced
     # Keep cutting the embedded model: a plane across the shaft.
     centre = SV.mean(axis=0)
     PV, PF = square(2, centre[2], lo=-10, hi=10)

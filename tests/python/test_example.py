@@ -33,7 +33,7 @@ def test_the_example_cuts_simulates_and_writes_a_series(tmp_path):
     assert len(low) == 1
     assert V1[np.unique(T1[piece == low[0]]), 2].max() < V0[:, 2].max() * 0.45 - 0.05
     SV, SF = tetcut.read_surface(surfaces[-1][1])
-    assert tetcut.measure_surface(SV, SF).watertight
+    assert tetcut.measure_surface(SV, SF).balanced
 
 
 def test_the_readme_five_line_example_prints_289(capsys):

@@ -380,5 +380,12 @@ TEST(Scene, SelfCollisionIsReadAndReported) {
   EXPECT_EQ(held.max_intersecting_pairs, 0);
 }
 
+// Frame files are named in one place: four digits, and the same as a printf pattern for ffmpeg.
+TEST(Scene, FrameFileNames) {
+  EXPECT_EQ(frame_file_name("mesh", 7, ".vtu"), "mesh_0007.vtu");
+  EXPECT_EQ(frame_file_name("surface", 12345, ".vtp"), "surface_12345.vtp");
+  EXPECT_EQ(frame_file_pattern("frame", ".png"), "frame_%04d.png");
+}
+
 }  // namespace
 }  // namespace tetcut

@@ -107,8 +107,8 @@ std::string check_cut_invariants(const TetMesh& input, const CutResult& result, 
   // The material surface.
   const MaterialSurface& s = result.surface;
   const SurfaceStats stats = measure_surface(s.surface);
-  if (!stats.watertight) {
-    return "the material surface is not watertight: " + std::to_string(stats.num_unbalanced_edges) + " unbalanced edges";
+  if (!stats.balanced) {
+    return "the material surface is not balanced: " + std::to_string(stats.num_unbalanced_edges) + " unbalanced edges";
   }
   if (!close(stats.enclosed_volume, volume, 1e-12, volume)) {
     return describe("the material surface does not enclose the material volume", stats.enclosed_volume, volume);

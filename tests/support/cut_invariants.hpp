@@ -19,7 +19,7 @@ TriangleSurface soup(const std::vector<Triangle>& triangles);
 ///    error below 1e-12) and to the copies' volumes;
 ///  - each copy's nodes are copies of its tet's nodes, in order;
 ///  - pieces are exactly the classes of copies that share a face in the output mesh;
-///  - the material surface is watertight (every edge used equally often each way: closed and
+///  - the material surface is balanced (every edge used equally often each way: closed and
 ///    consistently oriented), encloses the material volume (relative 1e-12), and its embedding
 ///    reproduces the vertices' rest positions;
 ///  - every surface triangle lies on a copy of its piece.
