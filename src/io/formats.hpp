@@ -16,6 +16,9 @@ namespace tetcut::io {
 
 class TextScanner;
 
+/// VTK's cell type number for a linear tetrahedron (legacy VTK and VTU alike).
+constexpr int kVtkTetra = 10;
+
 /// A tet mesh as parsed, before validation by the TetMesh constructor.
 struct TetMeshData {
   Points points;

@@ -11,8 +11,6 @@
 namespace tetcut::io {
 namespace {
 
-constexpr int kVtkTetra = 10;
-
 struct LegacyReader {
   TextScanner& in;
   std::string_view bytes;

@@ -18,8 +18,6 @@
 namespace tetcut::io {
 namespace {
 
-constexpr int kVtkTetra = 10;
-
 enum class Scalar { kInt8, kUInt8, kInt16, kUInt16, kInt32, kUInt32, kInt64, kUInt64, kFloat32, kFloat64 };
 
 struct ScalarInfo {

@@ -25,7 +25,7 @@ namespace {
 using detail::kArmijo;
 using detail::kEnergyRounding;
 // Halvings of the step before the line search gives up.
-constexpr int kMaxHalvings = 30;
+constexpr int kMaxClothHalvings = 30;
 
 // sum over free nodes of |g|^2 dt^2 / m: what a mass-only step would move, squared.
 double gradient_measure(const std::vector<double>& g, const std::vector<double>& weight) {
@@ -298,7 +298,7 @@ ClothStepReport ClothSimulator::step(const ClothStepOptions& options) {
     const double measure = gradient_measure(s.gradient, weight);
     double t = 1;
     bool accepted = false;
-    for (int halving = 0; halving < kMaxHalvings && !accepted; ++halving, t *= 0.5) {
+    for (int halving = 0; halving < kMaxClothHalvings && !accepted; ++halving, t *= 0.5) {
       for (Index i = 0; i < n; ++i) {
         for (int k = 0; k < 3; ++k) trial(i, k) = y(i, k) + t * s.direction[3 * i + k];
       }

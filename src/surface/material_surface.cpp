@@ -9,7 +9,8 @@
 #include <limits>
 
 namespace tetcut::surface {
-namespace {
+// Named rather than anonymous: SurfacePatches::State, declared in the header, holds these types.
+namespace patch_building {
 
 using cells::CellComplex;
 using cells::Corner;
@@ -171,7 +172,8 @@ Vec3 point_position(const TetMesh& mesh, const registry::IntersectionRegistry& r
 // Source of an uncovered facet on the material's boundary: the mesh face it lies on.
 std::int64_t face_source(Index face) { return -1 - static_cast<std::int64_t>(face); }
 
-}  // namespace
+}  // namespace patch_building
+using namespace patch_building;
 
 void triangulate_convex_polygon(std::vector<std::uint8_t> strict, bool reverse, std::vector<std::array<int, 3>>* triangles) {
   const int n = static_cast<int>(strict.size());

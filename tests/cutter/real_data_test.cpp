@@ -12,11 +12,12 @@
 #include <string>
 
 #include "support/cut_invariants.hpp"
+#include "support/real_data.hpp"
 
 namespace tetcut {
 namespace {
 
-TriangleSurface scan(const std::string& name) { return read_surface(std::string(TETCUT_REAL_DATA) + "/" + name + ".off"); }
+using testing::scan;
 
 // A BCC lattice over the scan's bounding box, grown by a margin, with about `cells` cubes along
 // the longest side.

@@ -15,6 +15,7 @@
 #include <string>
 
 #include "support/cut_invariants.hpp"
+#include "support/real_data.hpp"
 
 namespace tetcut {
 namespace {
@@ -286,7 +287,7 @@ TEST(Embed, CuttingTheEmbeddedModelFurther) {
   EXPECT_GT(disc, 0);
 }
 
-TriangleSurface scan(const std::string& name) { return read_surface(std::string(TETCUT_REAL_DATA) + "/" + name + ".off"); }
+using testing::scan;
 
 class EmbedScan : public ::testing::TestWithParam<const char*> {};
 

@@ -13,26 +13,15 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
+#include "support/scene_files.hpp"
 #include "support/temp_dir.hpp"
 
 namespace tetcut {
 namespace {
 
-std::filesystem::path write_file(const std::filesystem::path& dir, const std::string& name, const std::string& text) {
-  const std::filesystem::path path = dir / name;
-  std::ofstream(path) << text;
-  return path;
-}
+using testing::write_file;
 
-std::string load_error(const std::string& text) {
-  testing::TempDir dir;
-  try {
-    load_scene(write_file(dir.path(), "scene.json", text));
-  } catch (const Error& e) {
-    return e.what();
-  }
-  return "no error";
-}
+using testing::load_error;
 
 // A metre square of 4 x 4 cells hanging in the x-z plane from its top edge (z = 1).
 constexpr const char* kHanging = R"("cloth": {"mesh": {"grid": {"cells": 4, "size": 1, "plane": "xz"}},

@@ -15,26 +15,17 @@
 #include <sstream>
 #include <string>
 
+#include "support/scene_files.hpp"
 #include "support/temp_dir.hpp"
 
 namespace tetcut {
 namespace {
 
 std::filesystem::path write_scene(const std::filesystem::path& dir, const std::string& text) {
-  const std::filesystem::path path = dir / "scene.json";
-  std::ofstream(path) << text;
-  return path;
+  return testing::write_file(dir, "scene.json", text);
 }
 
-std::string load_error(const std::string& text) {
-  testing::TempDir dir;
-  try {
-    load_scene(write_scene(dir.path(), text));
-  } catch (const Error& e) {
-    return e.what();
-  }
-  return "no error";
-}
+using testing::load_error;
 
 constexpr const char* kCube = R"("mesh": {"grid": {"box": [0, 0, 0.05, 1, 1, 1.05], "cells": [2, 2, 2]}})";
 
