@@ -99,12 +99,6 @@ expect_exit 0 "$TETCUT" sim drop.json -o gif --animation drop.gif --fps 5
 [[ $(ffprobe -v error -count_frames -select_streams v:0 -show_entries stream=codec_name,nb_read_frames,r_frame_rate \
       -of csv=p=0 drop.gif) == "gif,5/1,3" ]] || fail "drop.gif is not a GIF of 3 frames at 5 per second"
 [[ -z $(ls -A | grep -E 'partial|ffmpeg.log') ]] || fail "temporary files left behind"
-# Every example scene loads and runs its first frames, into pictures and an animation.
-for scene in "$EXAMPLES"/*.json; do
-  name=$(basename "$scene" .json)
-  expect_exit 0 "$TETCUT" sim "$scene" -o "ex_$name" --frames 2 --animation "ex_$name.gif"
-  [[ -s ex_$name/frame_0002.png && -s ex_$name.gif ]] || fail "$name: no pictures or no animation"
-done
 expect_exit 2 "$TETCUT" sim drop.json -o avi --animation drop.avi
 expect_stderr "must be .mp4 or .gif"
 [[ ! -e avi ]] || fail "a bad animation name still ran the scene"
