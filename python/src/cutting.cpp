@@ -165,14 +165,16 @@ void bind_cutting(py::module_& m) {
       .def_readonly("degenerate_triangles", &SurfaceIntersections::degenerate_triangles)
       .def_property_readonly("examples", [](const SurfaceIntersections& r) { return to_numpy(r.examples); },
                              "int32 (k, 2): up to 16 intersecting pairs of triangle ids");
-  m.def("count_surface_intersections", [](const MaterialSurface& surface, py::handle T, py::handle X) {
+  m.def("count_surface_intersections", [](const MaterialSurface& surface, py::handle T, py::handle X, double opened) {
           const std::vector<std::array<Index, 4>> copies = tet_rows(T, "T", -1);
           const Points positions = points(X, "X");
           py::gil_scoped_release release;
-          return count_surface_intersections(surface, copies, positions);
-        }, py::arg("surface"), py::arg("T"), py::arg("X"),
+          return count_surface_intersections(surface, copies, positions, opened);
+        }, py::arg("surface"), py::arg("T"), py::arg("X"), py::arg("opened") = 0.0,
         "Pairs of the surface's triangles of different copies that intersect, with its vertices at X (n, 3) and the cut "
-        "mesh's copies T (m, 4): exact tests; neighbours in the material and unopened cuts left out.");
+        "mesh's copies T (m, 4): exact tests; neighbours in the material and unopened cuts left out, and sides of a cut "
+        "pressed into each other no deeper than `opened` (what a simulation's guards allow: "
+        "Simulator.surface_contact()[\"fresh_cut_allowance\"]).");
 
   m.def("swept_blade", [](py::handle A, py::handle B) {
           const Points a = points(A, "A"), b = points(B, "B");

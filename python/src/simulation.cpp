@@ -186,6 +186,8 @@ void bind_sim(py::module_& root) {
              d["candidates"] = c.candidates;
              d["joined_copy_pairs"] = c.joined_copy_pairs;
              d["rebuilds"] = c.rebuilds;
+             d["guards"] = c.guards;
+             d["fresh_cut_allowance"] = c.fresh_cut_allowance;
              return d;
            }, "What surface contact works with (a dict).")
       .def("surface_contact_energy", &Simulator::surface_contact_energy, "The surface contact energy now (J; inf if two parts touch).")

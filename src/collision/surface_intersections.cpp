@@ -13,6 +13,7 @@
 #include <cmath>
 #include <limits>
 
+#include "collision/proximity.hpp"
 #include "collision/twins.hpp"
 #include "geometry/predicates.hpp"
 #include "spatial/box_tree.hpp"
@@ -45,6 +46,18 @@ double reach_behind(const std::array<Vec3, 3>& a, const std::array<Vec3, 3>& b) 
   double deepest = 0;
   for (const Vec3& p : polygon) deepest = std::max(deepest, -unit.dot(p - b[0]));
   return deepest;
+}
+
+// The distance between two triangles where they do not intersect: the least of each corner's
+// distance to the other triangle and each pair of edges' distance. Floating point.
+double triangle_distance(const std::array<Vec3, 3>& a, const std::array<Vec3, 3>& b) {
+  double d = std::numeric_limits<double>::infinity();
+  for (int k = 0; k < 3; ++k) {
+    d = std::min(d, collision::point_triangle(a[k], b[0], b[1], b[2]).distance);
+    d = std::min(d, collision::point_triangle(b[k], a[0], a[1], a[2]).distance);
+    for (int l = 0; l < 3; ++l) d = std::min(d, collision::segment_segment(a[k], a[(k + 1) % 3], b[l], b[(l + 1) % 3]).distance);
+  }
+  return d;
 }
 
 }  // namespace
@@ -93,9 +106,10 @@ SurfaceIntersections count_surface_intersections(const MaterialSurface& surface,
     return true;
   };
   // Two sides of a cut pressed into each other, less than `opened` deep: triangles that touch in
-  // the material (decided exactly) and now cross no deeper than that (either reaches at most
-  // `opened` behind the other). Pressed together, the sides of a cut slide along each other
-  // (each bulges as it is squeezed), so their twin points part while the cut stays closed.
+  // the material (decided exactly, or apart by no more than the rounding of rest points) and now
+  // cross no deeper than that (either reaches at most `opened` behind the other). Pressed
+  // together, the sides of a cut slide along each other (each bulges as it is squeezed), so their
+  // twin points part while the cut stays closed.
   const auto pressed_cut = [&](Index a, Index b, const std::array<Vec3, 3>& ca, const std::array<Vec3, 3>& cb) {
     const auto rest = [&](Index t) {
       return std::array<Vec3, 3>{s.vertices.row(s.triangles(t, 0)).transpose(), s.vertices.row(s.triangles(t, 1)).transpose(),
@@ -103,8 +117,10 @@ SurfaceIntersections count_surface_intersections(const MaterialSurface& surface,
     };
     if (!(std::min(reach_behind(ca, cb), reach_behind(cb, ca)) <= opened)) return false;
     const auto ra = rest(a), rb = rest(b);
-    if (geometry::collinear(ra[0], ra[1], ra[2]) || geometry::collinear(rb[0], rb[1], rb[2])) return false;
-    return triangles_intersect(ra, rb);
+    if (!geometry::collinear(ra[0], ra[1], ra[2]) && !geometry::collinear(rb[0], rb[1], rb[2]) && triangles_intersect(ra, rb)) return true;
+    // Copies may round one exact point differently (a junction of two cuts is placed from each
+    // side's planes): triangles meeting there can miss each other by an ulp.
+    return triangle_distance(ra, rb) <= rounding * rest_scale;
   };
   std::vector<spatial::Aabb> boxes(static_cast<std::size_t>(F));
   std::vector<std::uint8_t> degenerate(static_cast<std::size_t>(F), 0);

@@ -40,14 +40,17 @@ CutBlock halves() {
   return b;
 }
 
-// The surface's vertices with the right piece moved by `shift` along x.
-Points shifted(const CutBlock& b, double shift) {
+// The surface's vertices with the right piece moved by `move`.
+Points moved(const CutBlock& b, const Vec3& move) {
   Points nodes = b.result.mesh.mesh.rest();
   for (Index n = 0; n < nodes.rows(); ++n) {
-    if (b.right_node[static_cast<std::size_t>(n)]) nodes(n, 0) += shift;
+    if (b.right_node[static_cast<std::size_t>(n)]) nodes.row(n) += move.transpose();
   }
   return b.result.surface.positions(b.result.mesh, nodes);
 }
+
+// The surface's vertices with the right piece moved by `shift` along x.
+Points shifted(const CutBlock& b, double shift) { return moved(b, Vec3(shift, 0, 0)); }
 
 TEST(SurfaceIntersections, AFreshCutIsNotACollision) {
   const CutBlock b = halves();
@@ -75,6 +78,17 @@ TEST(SurfaceIntersections, OnceOpenedTheSidesOfACutCountAsSoonAsTheyCross) {
   // Apart by 1e-12: parallel faces, no common point. Across by 1e-12: the halves overlap.
   EXPECT_EQ(count_surface_intersections(b.result.surface, b.copies, shifted(b, 1e-12)).intersecting_pairs, 0);
   EXPECT_GT(count_surface_intersections(b.result.surface, b.copies, shifted(b, -1e-12)).intersecting_pairs, 0);
+}
+
+// The right half pressed 1e-3 into the left one and slid as far along the cut: pressed within
+// what is allowed, not counted; allowed less, or pressed deeper, counted.
+TEST(SurfaceIntersections, SidesOfACutPressedAndSlidCountOnlyDeeperThanAllowed) {
+  const CutBlock b = halves();
+  const double pressed = 1e-3;
+  const Points slid = moved(b, Vec3(-pressed, -pressed, pressed));
+  EXPECT_EQ(count_surface_intersections(b.result.surface, b.copies, slid, 2 * pressed).intersecting_pairs, 0);
+  EXPECT_GT(count_surface_intersections(b.result.surface, b.copies, slid, pressed / 2).intersecting_pairs, 0);
+  EXPECT_GT(count_surface_intersections(b.result.surface, b.copies, moved(b, Vec3(-0.2, -0.1, 0.1)), 2 * pressed).intersecting_pairs, 10);
 }
 
 // One piece: an incision x = 0.5 from the top down to z = 0.3. Its right lip, pushed left far
