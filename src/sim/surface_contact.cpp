@@ -447,9 +447,11 @@ void SurfaceContact::rebuild(double rho) {
       const bool shared = c.edges ? (k[0] == k[2] || k[0] == k[3] || k[1] == k[2] || k[1] == k[3]) : (k[0] == k[1] || k[0] == k[2] || k[0] == k[3]);
       const double now = proximity(c, y).distance;
       if (shared || !(now <= rho)) return;
-      // A pair touching now counts as close in the material too: joined, it is left out (the
+      // A pair touching now counts as touching in the material too: joined, it is left out (the
       // barrier is infinite at distance 0), as the joins of surfaces touching from the start are.
-      c.rest_close = proximity(c, rest_y_).distance < settings_.thickness || !(now > 0) ? 1 : 0;
+      const double rest = proximity(c, rest_y_).distance;
+      c.rest_close = rest < settings_.thickness || !(now > 0) ? 1 : 0;
+      c.rest_touching = rest < guard_allowance() || !(now > 0) ? 1 : 0;
       out.push_back(c);
     };
     // The primitives of copy g that reach copy h's box, then those pairs: most pairs of nearby
@@ -477,7 +479,7 @@ void SurfaceContact::rebuild(double rho) {
       for (const Index v : near_vertices) {
         const spatial::Aabb reach = grown(vertex_box(v), rho);
         for (const Index t : near_triangles) {
-          if (reach.meets(triangle_boxes_[static_cast<std::size_t>(t)])) consider({v, t, 0, 0, 0, 0, key});
+          if (reach.meets(triangle_boxes_[static_cast<std::size_t>(t)])) consider({v, t, 0, 0, 0, 0, 0, key});
         }
       }
     };
@@ -495,7 +497,7 @@ void SurfaceContact::rebuild(double rho) {
         for (const Index e : near_edges_g) {
           const spatial::Aabb reach = grown(edge_boxes_[static_cast<std::size_t>(e)], rho);
           for (const Index f : near_edges_h) {
-            if (reach.meets(edge_boxes_[static_cast<std::size_t>(f)])) consider({e, f, 1, 0, 0, 0, key});
+            if (reach.meets(edge_boxes_[static_cast<std::size_t>(f)])) consider({e, f, 1, 0, 0, 0, 0, key});
           }
         }
       }
@@ -513,10 +515,12 @@ void SurfaceContact::mark_joined() {
   // neighbours).
   const auto sutured = [&](Index copy) { return static_cast<std::size_t>(copy) < sutured_.size() && sutured_[static_cast<std::size_t>(copy)] != 0; };
   for (Candidate& c : candidates_) {
-    // Of joined copies, only the pairs that were close in the material: the two sides of the cut.
-    // Their other pairs, apart when the cut was made, collide as any others (sticks sliding
-    // along each other while their cut faces still touch somewhere).
-    c.joined = c.rest_close && std::binary_search(joins_.begin(), joins_.end(), c.copies) ? 1 : 0;
+    // Of joined copies, only the pairs that touch in the material (within the guards' allowance):
+    // the two sides of the cut. Their other pairs, apart when the cut was made, collide as any
+    // others: sticks sliding along each other while their cut faces still touch somewhere, and
+    // faces of neighbouring sticks a sliver apart (a cut 0.0123 from a lattice plane), whose
+    // barrier, finite there, starts active.
+    c.joined = c.rest_touching && std::binary_search(joins_.begin(), joins_.end(), c.copies) ? 1 : 0;
     c.sutured = 0;
     if (sutured_.empty()) continue;
     const std::array<Index, 4> k = corners(c);

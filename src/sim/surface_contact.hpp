@@ -24,9 +24,11 @@
 // are one copy or share a node (neighbours in the material, within a tet of each other: their
 // surfaces meet by construction). Excluded for a while: pairs of copies "joined across a cut",
 // whose surfaces a cut has just made coincide (both sides of a fresh cut are at distance 0, where
-// the barrier is infinite), that were within dhat of each other in the material (or touched when
-// the list was built); the other pairs of joined copies, apart when the cut was made, count as
-// any others (sticks sliding along each other while their cut faces still touch elsewhere). When the surface is set after a cut, a pair of copies becomes joined
+// the barrier is infinite), that touched in the material (within the guards' allowance delta, below;
+// or touched when the list was built); the other pairs of joined copies, apart when the cut was
+// made, count as any others (sticks sliding along each other while their cut faces still touch
+// elsewhere, and faces of neighbouring sticks a sliver apart in the material: their barrier is
+// finite there and starts active). When the surface is set after a cut, a pair of copies becomes joined
 // when one of them changed in that cut and some pair of their primitives is within dhat both in
 // rest space and now, and the two are copies of tets that were neighbours before the cut (or at
 // distance 0 now: touching from the start; separate objects that merely start close are not
@@ -189,8 +191,9 @@ class SurfaceContact {
   struct Candidate {
     Index a, b;            // vertex and triangle, or two edges
     std::uint8_t edges;    // 0: vertex-triangle, 1: edge-edge
-    std::uint8_t joined;      // of copies joined across a cut and rest_close (not counted)
+    std::uint8_t joined;      // of copies joined across a cut and rest_touching (not counted)
     std::uint8_t rest_close;  // within dhat in the material
+    std::uint8_t rest_touching;  // within the guards' allowance in the material, or touching now
     std::uint8_t sutured;     // rest_close between sutured copies (not counted)
     std::uint64_t copies;     // the copy pair, (min << 32) | max
   };
