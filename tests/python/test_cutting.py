@@ -212,6 +212,13 @@ def test_counting_where_the_surface_passes_through_itself():
     X[np.unique(result.tets[right]), 0] -= 0.2  # the right half into the left
     found = tetcut.count_surface_intersections(s, result.tets, s.positions(result.tets, X))
     assert found.intersecting_pairs > 0 and found.examples.shape[1] == 2
+    # Pressed 1e-3 into each other and slid as far: within an allowance of 2e-3, the sides of a
+    # cut pressed together; with none, crossings.
+    X = result.vertices.copy()
+    X[np.unique(result.tets[right])] += [-1e-3, -1e-3, 1e-3]
+    pressed = s.positions(result.tets, X)
+    assert tetcut.count_surface_intersections(s, result.tets, pressed, opened=2e-3).intersecting_pairs == 0
+    assert tetcut.count_surface_intersections(s, result.tets, pressed).intersecting_pairs > 0
 
 
 def test_a_session_keeps_its_scene_alive():
