@@ -1,7 +1,5 @@
 #include "surface/material_surface.hpp"
 
-#include "util/broken.hpp"
-
 #include <Eigen/LU>  // 3x3 inverse
 #include <tbb/parallel_for.h>
 
@@ -9,8 +7,7 @@
 #include <limits>
 
 namespace tetcut::surface {
-// Named rather than anonymous: SurfacePatches::State, declared in the header, holds these types.
-namespace patch_building {
+namespace {
 
 using cells::CellComplex;
 using cells::Corner;
@@ -172,8 +169,7 @@ Vec3 point_position(const TetMesh& mesh, const registry::IntersectionRegistry& r
 // Source of an uncovered facet on the material's boundary: the mesh face it lies on.
 std::int64_t face_source(Index face) { return -1 - static_cast<std::int64_t>(face); }
 
-}  // namespace patch_building
-using namespace patch_building;
+}  // namespace
 
 void triangulate_convex_polygon(std::vector<std::uint8_t> strict, bool reverse, std::vector<std::array<int, 3>>* triangles) {
   const int n = static_cast<int>(strict.size());
@@ -197,7 +193,7 @@ void triangulate_convex_polygon(std::vector<std::uint8_t> strict, bool reverse, 
     for (int i = start, k = 0; k < remaining && ear < 0; i = next[i], ++k) {
       if (strict[i] && (strict_count > 3 || !strict[prev[i]] || !strict[next[i]])) ear = i;
     }
-    if (ear < 0) broken("surface", "a polygon has no clippable corner");
+    if (ear < 0) throw std::logic_error("surface: a polygon has no clippable corner");
     emit(prev[ear], ear, next[ear]);
     strict[prev[ear]] = strict[next[ear]] = 1;
     next[prev[ear]] = next[ear];
