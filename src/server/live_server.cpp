@@ -655,6 +655,10 @@ void LiveServer::Impl::accept() {
       if (ec != asio::error::operation_aborted) log("accept: " + ec.message());
       if (!acceptor.is_open()) return;
     } else {
+      // Small messages (a frame, a "cut" reply) go out at once: with Nagle's algorithm a small
+      // write behind a large one waits for the page's delayed ACK (40 ms on Linux).
+      beast::error_code nodelay_ec;
+      socket.set_option(tcp::no_delay(true), nodelay_ec);
       std::make_shared<HttpConnection>(*this, std::move(socket))->start();
     }
     accept();

@@ -18,11 +18,16 @@ const api = {
   // that shows the cut (the server's "cut" reply names the topology that holds it): how soon a
   // cut is seen.
   cutLatencies: [],
+  // Where that time went, a row per cut seen: milliseconds from the pose leaving to the server's
+  // "cut" reply arriving, to its topology arriving, to that topology read, to its first frame.
+  cutPhases: [],
   // Milliseconds the page spent reading each topology message, and drawing each frame.
   topologyMs: [], drawMs: [],
 };
 const bladeSentAt = new Map();  // blade poses' seq -> when they left, until answered or stale
 const cutSentAt = new Map();    // topology version -> when the first pose it shows left
+const cutReplyAt = new Map();   // topology version -> when the "cut" reply naming it arrived
+let topologyArrivedAt = 0, topologyReadAt = 0;  // the pending topology's arrival and reading
 window.tetcutLive = api;
 const showError = errorReporter(api, 'tetcut live');
 
@@ -132,8 +137,12 @@ function readFrame(buffer) {
     // Seen: the cuts this topology shows (and any an older one showed, dropped unseen).
     for (const [v, sentAt] of cutSentAt) {
       if (v > topology.version) continue;
-      api.cutLatencies.push(performance.now() - sentAt);
+      const now = performance.now();
+      api.cutLatencies.push(now - sentAt);
+      const reply = cutReplyAt.get(v) ?? topologyArrivedAt;
+      api.cutPhases.push([reply - sentAt, topologyArrivedAt - reply, topologyReadAt - topologyArrivedAt, now - topologyReadAt]);
       cutSentAt.delete(v);
+      cutReplyAt.delete(v);
     }
   }
   if (!topology || version !== topology.version) return;  // a frame of a topology not seen yet
@@ -192,6 +201,7 @@ function readText(text) {
     // Which topology shows the cut of a blade pose (it comes before that topology).
     const sentAt = bladeSentAt.get(message.seq);
     if (sentAt !== undefined) cutSentAt.set(message.version, Math.min(sentAt, cutSentAt.get(message.version) ?? Infinity));
+    if (!cutReplyAt.has(message.version)) cutReplyAt.set(message.version, performance.now());
     for (const s of bladeSentAt.keys()) if (s <= message.seq) bladeSentAt.delete(s);
   } else if (message.type === 'grabbed') {
     hookGrabbed(message);
@@ -235,9 +245,10 @@ socket.addEventListener('message', (event) => {
   if (typeof event.data === 'string') return readText(event.data);
   const kind = new Uint32Array(event.data, 0, 1)[0];
   if (kind === 1) {
-    const start = performance.now();
+    topologyArrivedAt = performance.now();
     readTopology(event.data);
-    api.topologyMs.push(performance.now() - start);
+    topologyReadAt = performance.now();
+    api.topologyMs.push(topologyReadAt - topologyArrivedAt);
   }
   else if (kind === 2) readFrame(event.data);
   else fail(`a message of unknown kind ${kind}`);

@@ -218,6 +218,10 @@ console.log(`     while cutting: ${cutFps.toFixed(1)} frames received per second
             `server: ${serverState.steps_per_second.toFixed(1)} steps/s, cut ${serverState.cut_ms.toFixed(1)} ms, ` +
             `new topology ${serverState.topology_ms.toFixed(1)} ms, pose to topology sent ${serverState.cut_latency_ms.toFixed(1)} ms`);
 check(latencies.length > 0, 'cuts reached the page as new topology');
+const phases = await live(() => window.tetcutLive.cutPhases);
+const phase = (k) => median(phases.map((row) => row[k])).toFixed(0);
+console.log(`     of which (medians): pose to the server's "cut" reply ${phase(0)} ms, to its topology arriving ${phase(1)} ms, ` +
+            `reading it ${phase(2)} ms, to its first frame ${phase(3)} ms`);
 const pageTimes = await live(() => ({ topology: window.tetcutLive.topologyMs, draw: window.tetcutLive.drawMs }));
 console.log(`     the page: ${median(pageTimes.topology).toFixed(1)} ms to read a topology (median), ` +
             `${median(pageTimes.draw).toFixed(1)} ms to draw a frame (median; SwiftShader, no GPU)`);
