@@ -41,7 +41,7 @@ using tetcut::bench::percentile;
 struct Phase {
   explicit Phase(std::string n) : name(std::move(n)) {}
   std::string name;
-  std::vector<double> tick_ms, step_ms, surface_ms, topology_ms, latency_ms;
+  std::vector<double> tick_ms, step_ms, surface_ms, topology_ms, latency_ms, change_bytes;
   double max_residual = 0;
   int rescues = 0;
 };
@@ -60,8 +60,9 @@ int main(int argc, char** argv) {
   std::uint32_t version = 0;
   tetcut::live::NodePieces pieces;
   // The server's work after a cut: the surface, the pieces, the topology message.
-  const auto topology = [&] { return tetcut::live::encode_topology(++version, session, &pieces); };
-  std::size_t topology_bytes = topology().size();
+  tetcut::live::TopologyEncoder encoder;
+  const auto topology = [&] { return encoder.encode(++version, session, &pieces); };
+  std::size_t topology_bytes = topology().full.size();
 
   // The femur's box, for the scripted hand.
   const tetcut::Points rest = session.surface_positions();
@@ -81,14 +82,16 @@ int main(int argc, char** argv) {
       session.surface();  // rebuilt after the cut
       phase.surface_ms.push_back(ms_since(t0));
       const auto t1 = Clock::now();
-      topology_bytes = topology().size();
+      const tetcut::live::TopologyEncoder::Messages messages = topology();
       phase.topology_ms.push_back(ms_since(t1));
+      topology_bytes = messages.full.size();
+      phase.change_bytes.push_back(static_cast<double>(messages.change.size()));
       phase.latency_ms.push_back(ms_since(start));
     }
     const auto s0 = Clock::now();
     const tetcut::SessionStep step = session.advance();
     phase.step_ms.push_back(ms_since(s0));
-    if (step.topology_changed && session.topology_changes() == changes) topology_bytes = topology().size();
+    if (step.topology_changed && session.topology_changes() == changes) topology_bytes = topology().full.size();
     frame_bytes = tetcut::live::encode_frame(version, static_cast<std::uint32_t>(session.steps()), session.time(),
                                              session.simulator().positions(), pieces)
                       .size();
@@ -122,9 +125,11 @@ int main(int argc, char** argv) {
   tick(phases.back(), [&] { session.release(hook); });
   for (int i = 0; i < 30; ++i) tick(phases.back(), nothing);
 
-  std::printf("  after the scalpel: %lld pieces, %lld tets; topology message %.2f MB, frame %.1f KB\n\n",
+  std::printf("  after the scalpel: %lld pieces, %lld tets; the whole topology %.2f MB, a cut's change %.1f KB median (max %.1f KB), "
+              "frame %.1f KB\n\n",
               static_cast<long long>(pieces_after_cut), static_cast<long long>(session.simulator().num_tets()),
-              static_cast<double>(topology_bytes) / 1e6, static_cast<double>(frame_bytes) / 1e3);
+              static_cast<double>(topology_bytes) / 1e6, percentile(phases[1].change_bytes, 0.5) / 1e3,
+              percentile(phases[1].change_bytes, 1.0) / 1e3, static_cast<double>(frame_bytes) / 1e3);
   std::printf("  %-8s %5s %22s %8s %22s %24s %9s %7s\n", "phase", "ticks", "tick ms median / p99", "ticks/s", "step ms median / p99",
               "pose to topology ms med/p99", "residual", "rescue");
   std::vector<double> all;
@@ -144,7 +149,7 @@ int main(int argc, char** argv) {
   mean /= static_cast<double>(all.size());
   std::printf("  %-8s %5zu %12.1f / %6.1f %8.0f\n", "all", all.size(), percentile(all, 0.5), percentile(all, 0.99), 1000 / mean);
   const Phase& cut = phases[1];
-  std::printf("\n  after each cut: the material surface rebuilt in %.1f ms (median; p99 %.1f), the topology message encoded in %.1f ms\n",
+  std::printf("\n  after each cut: the material surface rebuilt in %.1f ms (median; p99 %.1f), the topology messages (whole and change) encoded in %.1f ms\n",
               percentile(cut.surface_ms, 0.5), percentile(cut.surface_ms, 0.99), percentile(cut.topology_ms, 0.5));
   std::printf("  (ticks/s: 1000 over the mean tick, the rate the server could hold; it paces itself to 1/dt)\n");
   return 0;

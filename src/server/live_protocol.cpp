@@ -13,6 +13,7 @@
 #include <cstring>
 #include <limits>
 
+#include "util/broken.hpp"
 #include "util/union_find.hpp"
 
 namespace tetcut::live {
@@ -140,69 +141,147 @@ NodePieces node_pieces(const std::vector<std::array<Index, 4>>& copy_nodes, Inde
   return out;
 }
 
-TopologyLayout topology_layout(std::size_t copies, std::size_t nodes, std::size_t vertices, bool wide) {
-  const auto fits = [wide](std::size_t count) { return !wide && count <= std::size_t{1} << 16; };
-  TopologyLayout layout;
-  layout.flags = (fits(nodes) ? kNarrowNodes : 0u) | (fits(copies) ? kNarrowCopies : 0u) | (fits(vertices) ? kNarrowVertices : 0u);
-  const auto section = [](std::size_t bytes) { return (bytes + 3) / 4 * 4; };
-  const auto width = [&](std::uint32_t flag) -> std::size_t { return layout.flags & flag ? 2 : 4; };
-  layout.copy_nodes = 32;
-  layout.node_pieces = layout.copy_nodes + section(4 * copies * width(kNarrowNodes));
-  layout.vertex_copies = layout.node_pieces + section(nodes * width(kNarrowNodes));
-  layout.weights = layout.vertex_copies + section(vertices * width(kNarrowCopies));
-  layout.triangles = layout.weights + section(6 * vertices);
-  return layout;
+namespace {
+
+// Appends an index: 16 bits where `narrow`, else 32.
+void put_index(std::string& out, bool narrow, std::size_t i) {
+  if (narrow) {
+    put(out, static_cast<std::uint16_t>(i));
+  } else {
+    put(out, static_cast<std::uint32_t>(i));
+  }
 }
 
-std::string encode_topology(std::uint32_t version, const std::vector<std::array<Index, 4>>& copy_nodes,
-                            const NodePieces& pieces, const MaterialSurface& surface, bool wide) {
+}  // namespace
+
+TopologyEncoder::Messages TopologyEncoder::encode(std::uint32_t version, const std::vector<std::array<Index, 4>>& copy_nodes,
+                                                  std::span<const Index> tet_parent, const NodePieces& pieces,
+                                                  const MaterialSurface& surface) {
   const TriangleSurface& s = surface.surface;
-  const auto u32 = [](std::size_t i) { return static_cast<std::uint32_t>(i); };
-  const std::size_t T = copy_nodes.size(), N = pieces.node_piece.size();
-  const auto V = static_cast<std::size_t>(s.num_vertices()), F = static_cast<std::size_t>(s.num_triangles());
-  const TopologyLayout layout = topology_layout(T, N, V, wide);
-  const std::size_t colours = layout.triangles + (F * 3 * (layout.flags & kNarrowVertices ? 2 : 4) + 3) / 4 * 4;
-  std::string out;
-  out.reserve(colours + 4 * pieces.count);
-  for (const std::uint32_t v : {kTopologyMessage, version, u32(T), u32(N), u32(V), u32(F), pieces.count, layout.flags}) put(out, v);
-  // An index in 16 bits where the layout says so, else 32.
-  const auto index = [&](std::uint32_t flag, std::size_t i) {
-    if (layout.flags & flag) {
-      put(out, static_cast<std::uint16_t>(i));
-    } else {
-      put(out, u32(i));
-    }
+  const std::size_t N = pieces.node_piece.size();
+  const auto V = static_cast<std::size_t>(s.num_vertices());
+  const Index F = s.num_triangles();
+  const bool narrow_nodes = !wide_ && N <= std::size_t{1} << 16;
+  const std::uint32_t flags = (narrow_nodes ? kNarrowNodes : 0u) | (wide_ ? 0u : kNarrowPatches);
+
+  // 1. Each input tet's patch as it is now: its triangles are consecutive (the surface lists
+  //    them by input tet), its vertices numbered in order of first use. O(V + F).
+  // All patches in one buffer (no allocation per patch), `offsets[tet]..offsets[tet + 1]`.
+  std::string now;
+  now.reserve(bytes_.size() + bytes_.size() / 4);
+  std::vector<std::size_t> offsets;
+  offsets.reserve(offsets_.size());
+  offsets.push_back(0);
+  const auto close_patches_up_to = [&](std::size_t tet) {
+    while (offsets.size() <= tet) offsets.push_back(now.size());
   };
-  for (const auto& copy : copy_nodes) {
-    for (const Index n : copy) index(kNarrowNodes, static_cast<std::size_t>(n));
+  local_.assign(V, -1);
+  std::vector<Index> vertices;
+  std::size_t total_vertices = 0, total_triangles = 0;
+  for (Index first = 0; first < F;) {
+    const Index tet = tet_parent[static_cast<std::size_t>(surface.triangle_tet[static_cast<std::size_t>(first)])];
+    Index end = first;
+    while (end < F && tet_parent[static_cast<std::size_t>(surface.triangle_tet[static_cast<std::size_t>(end)])] == tet) ++end;
+    if (offsets.size() > static_cast<std::size_t>(tet) + 1) broken("live protocol", "the material surface's triangles are not grouped by input tet");
+    close_patches_up_to(static_cast<std::size_t>(tet));
+    vertices.clear();
+    for (Index t = first; t < end; ++t) {
+      for (int k = 0; k < 3; ++k) {
+        const Index v = s.triangles(t, k);
+        if (local_[static_cast<std::size_t>(v)] < 0) {
+          local_[static_cast<std::size_t>(v)] = static_cast<std::int32_t>(vertices.size());
+          vertices.push_back(v);
+        }
+      }
+    }
+    std::string& out = now;
+    const bool narrow_local = !wide_ && vertices.size() <= std::size_t{1} << 16;
+    for (const std::uint32_t x : {static_cast<std::uint32_t>(tet), static_cast<std::uint32_t>(vertices.size()), static_cast<std::uint32_t>(end - first)}) {
+      put(out, x);
+    }
+    for (const Index v : vertices) {
+      for (const Index n : copy_nodes[static_cast<std::size_t>(surface.vertex_tet[static_cast<std::size_t>(v)])]) {
+        put_index(out, narrow_nodes, static_cast<std::size_t>(n));
+      }
+    }
+    pad4(out);
+    // Weights 0..2 in units of 1/65535: a vertex is placed within 1e-5 of its copy's size, and
+    // its weights take 6 bytes, not 16.
+    for (const Index v : vertices) {
+      for (int k = 0; k < 3; ++k) {
+        put(out, static_cast<std::uint16_t>(std::lround(std::clamp(surface.vertex_weights(v, k), 0.0, 1.0) * 65535.0)));
+      }
+    }
+    pad4(out);
+    for (Index t = first; t < end; ++t) {
+      for (int k = 0; k < 3; ++k) put_index(out, narrow_local, static_cast<std::size_t>(local_[static_cast<std::size_t>(s.triangles(t, k))]));
+    }
+    pad4(out);
+    for (const Index v : vertices) local_[static_cast<std::size_t>(v)] = -1;
+    total_vertices += vertices.size();
+    total_triangles += static_cast<std::size_t>(end - first);
+    offsets.push_back(now.size());
+    first = end;
   }
-  pad4(out);
-  for (const std::uint32_t p : pieces.node_piece) index(kNarrowNodes, p);
-  pad4(out);
-  for (std::size_t v = 0; v < V; ++v) index(kNarrowCopies, static_cast<std::size_t>(surface.vertex_tet[v]));
-  pad4(out);
-  // Weights 0..2 in units of 1/65535 (the page takes the fourth as one less their sum): a
-  // vertex is placed within 1e-5 of its copy's size, and the weights take 6 bytes, not 16.
-  for (Index v = 0; v < static_cast<Index>(V); ++v) {
-    for (int k = 0; k < 3; ++k) put(out, static_cast<std::uint16_t>(std::lround(std::clamp(surface.vertex_weights(v, k), 0.0, 1.0) * 65535.0)));
+  close_patches_up_to(offsets_.empty() ? 0 : offsets_.size() - 1);
+  const std::size_t tets = offsets.size() - 1;
+  const auto patch = [](const std::string& bytes, const std::vector<std::size_t>& at, std::size_t tet) {
+    return tet + 1 < at.size() ? std::string_view(bytes).substr(at[tet], at[tet + 1] - at[tet]) : std::string_view();
+  };
+
+  // 2. The whole topology, and what changed since the last version: the patches whose bytes
+  //    differ (a removed one as its tet with no vertices or triangles). O(T + bytes).
+  const auto message = [&](std::uint32_t base, std::size_t patches, std::size_t bytes) {
+    std::string out;
+    out.reserve(kTopologyHeader + 4 * N + 4 * pieces.count + bytes);
+    for (const std::uint32_t x : {kTopologyMessage, version, base, static_cast<std::uint32_t>(N), pieces.count, static_cast<std::uint32_t>(patches),
+                                  static_cast<std::uint32_t>(total_vertices), static_cast<std::uint32_t>(total_triangles), flags, 0u}) {
+      put(out, x);
+    }
+    for (const std::uint32_t p : pieces.node_piece) put_index(out, narrow_nodes, p);
+    pad4(out);
+    for (std::uint32_t p = 0; p < pieces.count; ++p) {
+      const auto rgb = render::piece_colour(static_cast<Index>(p));
+      out.append(reinterpret_cast<const char*>(rgb.data()), 3);
+      out.push_back('\0');
+    }
+    return out;
+  };
+  std::size_t full_patches = 0;
+  for (std::size_t tet = 0; tet < tets; ++tet) full_patches += offsets[tet + 1] > offsets[tet] ? 1 : 0;
+  Messages messages;
+  messages.version = version;
+  messages.full = message(0, full_patches, now.size());
+  messages.full += now;
+  if (last_version_ != 0 && version == last_version_ + 1) {
+    std::vector<std::size_t> changed;
+    std::size_t changed_bytes = 0;
+    for (std::size_t tet = 0; tet < tets; ++tet) {
+      const std::string_view p = patch(now, offsets, tet);
+      if (p == patch(bytes_, offsets_, tet)) continue;
+      changed.push_back(tet);
+      changed_bytes += p.empty() ? 12 : p.size();
+    }
+    messages.change = message(last_version_, changed.size(), changed_bytes);
+    for (const std::size_t tet : changed) {
+      const std::string_view p = patch(now, offsets, tet);
+      if (p.empty()) {
+        for (const std::uint32_t x : {static_cast<std::uint32_t>(tet), 0u, 0u}) put(messages.change, x);
+      } else {
+        messages.change += p;
+      }
+    }
   }
-  pad4(out);
-  for (Index t = 0; t < static_cast<Index>(F); ++t) {
-    for (int k = 0; k < 3; ++k) index(kNarrowVertices, static_cast<std::size_t>(s.triangles(t, k)));
-  }
-  pad4(out);
-  for (std::uint32_t p = 0; p < pieces.count; ++p) {
-    const auto rgb = render::piece_colour(static_cast<Index>(p));
-    out.append(reinterpret_cast<const char*>(rgb.data()), 3);
-    out.push_back('\0');
-  }
-  return out;
+  bytes_ = std::move(now);
+  offsets_ = std::move(offsets);
+  last_version_ = version;
+  return messages;
 }
 
-std::string encode_topology(std::uint32_t version, Session& session, NodePieces* pieces) {
+TopologyEncoder::Messages TopologyEncoder::encode(std::uint32_t version, Session& session, NodePieces* pieces) {
   const Cutter& cutter = session.cutter();
   *pieces = node_pieces(cutter.tet_nodes(), cutter.num_nodes());
-  return encode_topology(version, cutter.tet_nodes(), *pieces, session.surface());
+  return encode(version, cutter.tet_nodes(), cutter.tet_parent(), *pieces, session.surface());
 }
 
 std::string encode_frame(std::uint32_t version, std::uint32_t step, double time, const Points& nodes, const NodePieces& pieces) {

@@ -3,24 +3,33 @@
 // that it is tested on its own.
 //
 // Server to page, binary (little-endian, every section 4-byte aligned):
-//   topology  u32 kind = 1, version, copies T, nodes N, vertices V, triangles F, pieces P, flags
-//             T x 4 node  each tet copy's nodes
+//   topology  u32 kind = 1, version, base, nodes N, pieces P, patches K, vertices V, triangles F,
+//             flags, 0
 //             N node      each node's piece (pieces: nodes connected through copies, most nodes first)
-//             V copy      the copy each surface vertex is embedded in
-//             V x 3 u16   its barycentric weights 0..2 in that copy, in units of 1/65535 (the
-//                         fourth is one less their sum)
-//             F x 3 vert  the material surface's triangles (outward)
 //             P x 4 u8    each piece's colour (sRGB, then 0)
-//             A node, copy or vert index is a u16 where flags has kNarrowNodes, kNarrowCopies or
-//             kNarrowVertices (that count is at most 65536), else a u32: the default scene's
-//             topology is 1 MB, not the 2.4 MB of 32-bit indices and float weights.
+//             K patches   the material surface inside one input tet each:
+//                         u32 tet, vertices n, triangles m
+//                         n x 4 node  each vertex's four nodes (those of the copy it is embedded in)
+//                         n x 3 u16   its weights for the first three, in units of 1/65535 (the
+//                                     fourth is one less their sum)
+//                         m x 3 local its triangles (outward), indices into the patch's vertices
+//             Base 0: the whole topology; the patches are all there are. Otherwise the patches
+//             that changed since version `base` (which the page holds): each replaces the patch
+//             of its tet, and one with no triangles removes it; V and F count the surface after.
+//             A node index is a u16 where flags has kNarrowNodes (N at most 65536), else a u32;
+//             a local index a u16 where flags has kNarrowPatches and the patch has at most 65536
+//             vertices, else a u32.
 //   frame     u32 kind = 2, topology version, step, N, P, 0; f64 simulated time;
 //             P x 6 f32   each piece's box: min[3], step[3]
 //             N x 3 u16   node positions, quantised in their piece's box: x = min + q step
 // Boxes are per piece so that a piece falling away does not coarsen the others' positions.
 // The page places the surface's vertices from the nodes (weights times corners), so a frame is
 // 6 bytes a node (16 KB for the default scene's 2.6k nodes), however fine the surface. Topology
-// goes out only when a cut changed it (and to a page that joins).
+// goes out only when a cut changed it, as the patches it changed (a blade pose changes a few
+// tets' patches: tens of kilobytes, where the whole topology of the default scene is 1.9 MB), and whole
+// to a page that joins or has fallen behind by more than that.
+// A vertex on the border of two patches is in both: each patch stands alone, so replacing one
+// never renumbers another (the page draws with flat shading, which needs no shared vertices).
 //
 // Page to server, JSON text, at most kMaxClientMessage bytes, with an optional increasing "seq"
 // that replies echo:
@@ -42,6 +51,7 @@
 
 #include <cstdint>
 #include <optional>
+#include <span>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -51,7 +61,7 @@ namespace tetcut::live {
 inline constexpr std::uint32_t kTopologyMessage = 1;
 inline constexpr std::uint32_t kFrameMessage = 2;
 /// A topology's flags: which of its indices are 16-bit.
-inline constexpr std::uint32_t kNarrowNodes = 1, kNarrowCopies = 2, kNarrowVertices = 4;
+inline constexpr std::uint32_t kNarrowNodes = 1, kNarrowPatches = 2;
 /// Page messages longer than this get an error reply (the longest valid one is ~150 bytes).
 inline constexpr std::size_t kMaxClientMessage = 16 * 1024;
 
@@ -76,21 +86,38 @@ struct NodePieces {
 };
 NodePieces node_pieces(const std::vector<std::array<Index, 4>>& copy_nodes, Index num_nodes);
 
-/// Where a topology message's sections start (bytes) and its flags, for these counts; `wide`:
-/// 32-bit indices whatever the counts.
-struct TopologyLayout {
-  std::uint32_t flags = 0;
-  std::size_t copy_nodes = 0, node_pieces = 0, vertex_copies = 0, weights = 0, triangles = 0;
-};
-TopologyLayout topology_layout(std::size_t copies, std::size_t nodes, std::size_t vertices, bool wide = false);
+inline constexpr std::size_t kTopologyHeader = 40;
 
-/// A topology message: the copies (`copy_nodes`, as Cutter::tet_nodes), their pieces, the
-/// surface, and the pieces' colours. O(T + N + V + F).
-std::string encode_topology(std::uint32_t version, const std::vector<std::array<Index, 4>>& copy_nodes,
-                            const NodePieces& pieces, const MaterialSurface& surface, bool wide = false);
-/// The topology message of a session as it stands (its cutter's copies and its material
-/// surface); sets `pieces`, which its frames quantise by.
-std::string encode_topology(std::uint32_t version, Session& session, NodePieces* pieces);
+/// Encodes topology messages, remembering the last one's patches so that the next can say only
+/// what changed.
+class TopologyEncoder {
+ public:
+  /// `wide`: 32-bit indices whatever the counts (for tests).
+  explicit TopologyEncoder(bool wide = false) : wide_(wide) {}
+
+  struct Messages {
+    std::uint32_t version = 0;
+    std::string full;    ///< base 0: the whole topology
+    std::string change;  ///< base version - 1: what changed; empty when the last encode was not of version - 1
+  };
+  /// The topology of a cut mesh: its copies (`copy_nodes`, as Cutter::tet_nodes) and their input
+  /// tets (`tet_parent`), the pieces of its nodes, and its material surface (whose triangles come
+  /// grouped by input tet in increasing order, as Cutter::surface gives them). O(T + V + F).
+  Messages encode(std::uint32_t version, const std::vector<std::array<Index, 4>>& copy_nodes, std::span<const Index> tet_parent,
+                  const NodePieces& pieces, const MaterialSurface& surface);
+  /// The same for a session as it stands; sets `pieces`, which its frames quantise by.
+  Messages encode(std::uint32_t version, Session& session, NodePieces* pieces);
+
+ private:
+  bool wide_;
+  std::uint32_t last_version_ = 0;
+  // The patches as encoded last, one after another: tet t's is bytes_[offsets_[t], offsets_[t + 1])
+  // (empty: none).
+  std::string bytes_;
+  std::vector<std::size_t> offsets_;
+  std::vector<std::int32_t> local_;   // per surface vertex: its index in the patch being encoded
+};
+
 /// A frame message: node positions quantised to 16 bits in their piece's bounding box.
 std::string encode_frame(std::uint32_t version, std::uint32_t step, double time, const Points& nodes, const NodePieces& pieces);
 

@@ -48,6 +48,14 @@ using tcp = asio::ip::tcp;
 using Json = nlohmann::json;
 using Message = std::shared_ptr<const std::string>;
 
+// A topology as the pages are sent it: whole, and as the change from the version before (null
+// when there is none).
+struct Topology {
+  std::uint32_t version = 0;
+  Message full, change;
+};
+using TopologyPtr = std::shared_ptr<const Topology>;
+
 // A page's pending text messages beyond this are dropped (oldest first): a page that does not
 // read cannot grow the server's memory.
 constexpr std::size_t kMaxQueuedTexts = 64;
@@ -111,11 +119,13 @@ struct LiveServer::Impl {
   // Network thread only.
   std::map<std::uint64_t, std::weak_ptr<Page>> pages;
   std::uint64_t next_page = 0;
-  Message latest_topology, latest_frame;
+  TopologyPtr latest_topology;
+  Message latest_frame;
 
   // The simulation thread's; read by stop() after it has ended.
   std::optional<Session> session;
   std::uint32_t topology_version = 0;
+  live::TopologyEncoder topology_encoder;
   live::NodePieces pieces;
   bool paused = false;
   std::optional<Clock::time_point> blade_received;  // the first blade pose since the last frame
@@ -139,6 +149,7 @@ struct LiveServer::Impl {
   struct Figures {
     double step_ms = 0, cut_ms = 0, surface_ms = 0, remesh_ms = 0, topology_ms = 0, latency_ms = 0, residual = 0;
     double steps_per_second = 0;
+    std::size_t topology_bytes = 0;  // the last topology change's size (the whole one's, when there was no change)
   } figures;
 
   Impl(Scene s, LiveServerOptions o) : scene(std::move(s)), options(std::move(o)) {
@@ -193,7 +204,12 @@ struct LiveServer::Impl {
   void broadcast_text(std::string text);
 
   void publish_topology_and_frame() {
-    auto topology = std::make_shared<const std::string>(live::encode_topology(++topology_version, *session, &pieces));
+    live::TopologyEncoder::Messages messages = topology_encoder.encode(++topology_version, *session, &pieces);
+    auto topology = std::make_shared<Topology>();
+    topology->version = messages.version;
+    topology->full = std::make_shared<const std::string>(std::move(messages.full));
+    if (!messages.change.empty()) topology->change = std::make_shared<const std::string>(std::move(messages.change));
+    figures.topology_bytes = (topology->change ? topology->change : topology->full)->size();
     // /api/state tells the new pieces before any page can see them (not after the next step).
     refresh_state();
     publish(std::move(topology));
@@ -209,13 +225,13 @@ struct LiveServer::Impl {
     blade_received.reset();
   }
 
-  void publish(Message topology) {
+  void publish(TopologyPtr topology) {
     auto frame = std::make_shared<const std::string>(
         live::encode_frame(topology_version, static_cast<std::uint32_t>(session->steps()), session->time(), session->simulator().positions(), pieces));
     asio::post(io, [this, topology = std::move(topology), frame = std::move(frame)] { deliver(topology, frame); });
   }
 
-  void deliver(const Message& topology, const Message& frame);
+  void deliver(const TopologyPtr& topology, const Message& frame);
 
   std::string state_now() {
     Session& s = *session;
@@ -237,6 +253,7 @@ struct LiveServer::Impl {
         {"surface_ms", figures.surface_ms},
         {"remesh_ms", figures.remesh_ms},
         {"topology_ms", figures.topology_ms},
+        {"topology_bytes", figures.topology_bytes},
         {"cut_latency_ms", figures.latency_ms},
         {"residual", figures.residual},
         {"dt", scene.step.dt},
@@ -369,9 +386,22 @@ class LiveServer::Impl::Page : public std::enable_shared_from_this<Page> {
     });
   }
 
-  // The newest topology (when there is one) and frame; older ones not yet sent are dropped.
-  void offer(const Message& topology, const Message& frame) {
-    if (topology) topology_ = topology;
+  // The newest topology (when there is one) and frame; frames not yet sent are dropped. A
+  // topology goes as its change from the version the page will have, while the changes queued
+  // for it weigh less than the whole (then the whole replaces them): the page applies them in
+  // order, and however slow it is, at most a whole topology's bytes wait for it.
+  void offer(const TopologyPtr& topology, const Message& frame) {
+    if (topology) {
+      const Message& change = topology->change;
+      if (change && version_ + 1 == topology->version && topology_bytes_ + change->size() <= topology->full->size()) {
+        topologies_.push_back(change);
+        topology_bytes_ += change->size();
+      } else {
+        topologies_.assign(1, topology->full);
+        topology_bytes_ = topology->full->size();
+      }
+      version_ = topology->version;
+    }
     if (frame) frame_ = frame;
     write();
   }
@@ -430,9 +460,10 @@ class LiveServer::Impl::Page : public std::enable_shared_from_this<Page> {
       next = std::move(texts_.front());
       texts_.pop_front();
       binary = false;
-    } else if (topology_) {
-      next = std::move(topology_);
-      topology_.reset();
+    } else if (!topologies_.empty()) {
+      next = std::move(topologies_.front());
+      topologies_.pop_front();
+      topology_bytes_ -= next->size();
     } else if (frame_) {
       next = std::move(frame_);
       frame_.reset();
@@ -461,7 +492,10 @@ class LiveServer::Impl::Page : public std::enable_shared_from_this<Page> {
   beast::flat_buffer buffer_;
   std::uint64_t id_;
   std::deque<Message> texts_;
-  Message topology_, frame_;
+  std::deque<Message> topologies_;  // to send, in order
+  std::size_t topology_bytes_ = 0;  // their size
+  std::uint32_t version_ = 0;       // the topology version the page has once they are sent
+  Message frame_;
   std::optional<std::int64_t> last_seq_;
   bool writing_ = false, closed_ = false;
 };
@@ -480,7 +514,7 @@ void LiveServer::Impl::broadcast_text(std::string text) {
   });
 }
 
-void LiveServer::Impl::deliver(const Message& topology, const Message& frame) {
+void LiveServer::Impl::deliver(const TopologyPtr& topology, const Message& frame) {
   if (topology) latest_topology = topology;
   latest_frame = frame;
   for (const auto& [id, page] : pages) {

@@ -9,7 +9,9 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstring>
+#include <map>
 #include <string>
 
 #include "server/live_protocol.hpp"
@@ -121,109 +123,197 @@ TEST(LiveProtocol, FramesQuantiseEachPieceInItsOwnBox) {
 }
 
 // A topology message read back as the page reads it: by its header's counts and flags.
-struct DecodedTopology {
-  std::uint32_t version = 0, flags = 0, pieces = 0;
-  std::vector<std::array<std::uint32_t, 4>> copy_nodes;
-  std::vector<std::uint32_t> node_piece, vertex_copy;
+struct DecodedPatch {
+  std::vector<std::array<std::uint32_t, 4>> nodes;
   std::vector<std::array<double, 4>> weights;
   std::vector<std::array<std::uint32_t, 3>> triangles;
+  bool operator==(const DecodedPatch&) const = default;
+};
+struct DecodedTopology {
+  std::uint32_t version = 0, base = 0, flags = 0, pieces = 0, vertices = 0, triangles = 0;
+  std::vector<std::uint32_t> node_piece;
   std::vector<std::array<std::uint8_t, 3>> colours;
+  std::vector<std::pair<std::uint32_t, DecodedPatch>> patches;  // in message order
 };
 
 DecodedTopology decode_topology(const std::string& m) {
   DecodedTopology d;
   EXPECT_EQ(read_at<std::uint32_t>(m, 0), kTopologyMessage);
   d.version = read_at<std::uint32_t>(m, 4);
-  const std::size_t T = read_at<std::uint32_t>(m, 8), N = read_at<std::uint32_t>(m, 12), V = read_at<std::uint32_t>(m, 16),
-                    F = read_at<std::uint32_t>(m, 20);
-  d.pieces = read_at<std::uint32_t>(m, 24);
-  d.flags = read_at<std::uint32_t>(m, 28);
-  std::size_t at = 32;
+  d.base = read_at<std::uint32_t>(m, 8);
+  const std::size_t N = read_at<std::uint32_t>(m, 12);
+  d.pieces = read_at<std::uint32_t>(m, 16);
+  const std::size_t K = read_at<std::uint32_t>(m, 20);
+  d.vertices = read_at<std::uint32_t>(m, 24);
+  d.triangles = read_at<std::uint32_t>(m, 28);
+  d.flags = read_at<std::uint32_t>(m, 32);
+  EXPECT_EQ(read_at<std::uint32_t>(m, 36), 0u);
+  std::size_t at = kTopologyHeader;
   const auto align = [&] { at = (at + 3) / 4 * 4; };
-  const auto index = [&](std::uint32_t flag) -> std::uint32_t {
-    const std::uint32_t i = d.flags & flag ? read_at<std::uint16_t>(m, at) : read_at<std::uint32_t>(m, at);
-    at += d.flags & flag ? 2 : 4;
+  const auto index = [&](bool narrow) -> std::uint32_t {
+    const std::uint32_t i = narrow ? read_at<std::uint16_t>(m, at) : read_at<std::uint32_t>(m, at);
+    at += narrow ? 2 : 4;
     return i;
   };
-  d.copy_nodes.resize(T);
-  for (auto& copy : d.copy_nodes) {
-    for (auto& n : copy) n = index(kNarrowNodes);
-  }
-  align();
-  for (std::size_t n = 0; n < N; ++n) d.node_piece.push_back(index(kNarrowNodes));
-  align();
-  for (std::size_t v = 0; v < V; ++v) d.vertex_copy.push_back(index(kNarrowCopies));
-  align();
-  for (std::size_t v = 0; v < V; ++v) {
-    std::array<double, 4> w{};
-    for (int k = 0; k < 3; ++k, at += 2) w[static_cast<std::size_t>(k)] = read_at<std::uint16_t>(m, at) / 65535.0;
-    w[3] = 1 - w[0] - w[1] - w[2];
-    d.weights.push_back(w);
-  }
-  align();
-  d.triangles.resize(F);
-  for (auto& t : d.triangles) {
-    for (auto& v : t) v = index(kNarrowVertices);
-  }
+  const bool narrow_nodes = (d.flags & kNarrowNodes) != 0;
+  for (std::size_t n = 0; n < N; ++n) d.node_piece.push_back(index(narrow_nodes));
   align();
   for (std::uint32_t p = 0; p < d.pieces; ++p, at += 4) {
     d.colours.push_back({read_at<std::uint8_t>(m, at), read_at<std::uint8_t>(m, at + 1), read_at<std::uint8_t>(m, at + 2)});
     EXPECT_EQ(read_at<std::uint8_t>(m, at + 3), 0);
   }
+  for (std::size_t k = 0; k < K; ++k) {
+    const std::uint32_t tet = index(false), n = index(false), f = index(false);
+    DecodedPatch patch;
+    patch.nodes.resize(n);
+    for (auto& corner : patch.nodes) {
+      for (auto& node : corner) node = index(narrow_nodes);
+    }
+    align();
+    for (std::uint32_t v = 0; v < n; ++v) {
+      std::array<double, 4> w{};
+      for (int c = 0; c < 3; ++c, at += 2) w[static_cast<std::size_t>(c)] = read_at<std::uint16_t>(m, at) / 65535.0;
+      w[3] = 1 - w[0] - w[1] - w[2];
+      patch.weights.push_back(w);
+    }
+    align();
+    const bool narrow_local = (d.flags & kNarrowPatches) != 0 && n <= 65536;
+    patch.triangles.resize(f);
+    for (auto& t : patch.triangles) {
+      for (auto& v : t) {
+        v = index(narrow_local);
+        EXPECT_LT(v, n);
+      }
+    }
+    align();
+    d.patches.emplace_back(tet, std::move(patch));
+  }
   EXPECT_EQ(at, m.size());  // nothing left over, nothing missing
   return d;
+}
+
+// What the page holds: the patches by input tet, after a whole topology and the changes since.
+using PagePatches = std::map<std::uint32_t, DecodedPatch>;
+void apply_topology(const DecodedTopology& d, PagePatches* page) {
+  if (d.base == 0) page->clear();
+  for (const auto& [tet, patch] : d.patches) {
+    if (patch.triangles.empty()) {
+      EXPECT_TRUE(patch.nodes.empty());
+      EXPECT_EQ(page->erase(tet), 1u) << "removes a patch the page does not have: " << tet;
+    } else {
+      (*page)[tet] = patch;
+    }
+  }
+  std::size_t vertices = 0, triangles = 0;
+  for (const auto& [tet, patch] : *page) {
+    vertices += patch.nodes.size();
+    triangles += patch.triangles.size();
+  }
+  EXPECT_EQ(vertices, d.vertices);
+  EXPECT_EQ(triangles, d.triangles);
+}
+
+TriangleSurface plane_at_x(double x) {
+  TriangleSurface plane;
+  plane.vertices.resize(4, 3);
+  plane.vertices << x, -1, -1, x, 2, -1, x, 2, 2, x, -1, 2;
+  plane.triangles.resize(2, 3);
+  plane.triangles << 0, 1, 2, 0, 2, 3;
+  return plane;
 }
 
 TEST(LiveProtocol, TopologyHoldsTheSurfaceEmbeddedInItsCopies) {
   // A block cut in two by a plane at x = 0.4: two pieces, each with its colour.
   Cutter cutter(make_grid(Box{}, {3, 3, 3}, 5));
-  TriangleSurface plane;
-  plane.vertices.resize(4, 3);
-  plane.vertices << 0.4, -1, -1, 0.4, 2, -1, 0.4, 2, 2, 0.4, -1, 2;
-  plane.triangles.resize(2, 3);
-  plane.triangles << 0, 1, 2, 0, 2, 3;
-  cutter.cut(plane);
+  cutter.cut(plane_at_x(0.4));
   const MaterialSurface surface = cutter.surface();
   const NodePieces pieces = node_pieces(cutter.tet_nodes(), cutter.num_nodes());
   ASSERT_EQ(pieces.count, 2u);
   const Points& rest = cutter.input().rest();
   for (const bool wide : {false, true}) {
     SCOPED_TRACE(wide ? "32-bit indices" : "16-bit indices");
-    const std::string topology = encode_topology(5, cutter.tet_nodes(), pieces, surface, wide);
-    const DecodedTopology d = decode_topology(topology);
+    TopologyEncoder encoder(wide);
+    const TopologyEncoder::Messages messages = encoder.encode(5, cutter.tet_nodes(), cutter.tet_parent(), pieces, surface);
+    EXPECT_TRUE(messages.change.empty());  // nothing to change from
+    const DecodedTopology d = decode_topology(messages.full);
     EXPECT_EQ(d.version, 5u);
-    EXPECT_EQ(d.flags, wide ? 0u : kNarrowNodes | kNarrowCopies | kNarrowVertices);
-    const TopologyLayout layout = topology_layout(cutter.tet_nodes().size(), pieces.node_piece.size(),
-                                                  static_cast<std::size_t>(surface.surface.num_vertices()), wide);
-    EXPECT_EQ(layout.flags, d.flags);
-    EXPECT_EQ(read_at<std::uint32_t>(topology, layout.triangles) & (wide ? 0xffffffffu : 0xffffu),
-              static_cast<std::uint32_t>(surface.surface.triangles(0, 0)));
-    ASSERT_EQ(d.copy_nodes.size(), cutter.tet_nodes().size());
-    for (std::size_t t = 0; t < d.copy_nodes.size(); ++t) {
-      for (int k = 0; k < 4; ++k) EXPECT_EQ(d.copy_nodes[t][static_cast<std::size_t>(k)], static_cast<std::uint32_t>(cutter.tet_nodes()[t][static_cast<std::size_t>(k)]));
-    }
+    EXPECT_EQ(d.base, 0u);
+    EXPECT_EQ(d.flags, wide ? 0u : kNarrowNodes | kNarrowPatches);
     EXPECT_EQ(d.node_piece, pieces.node_piece);
-    ASSERT_EQ(d.triangles.size(), static_cast<std::size_t>(surface.surface.num_triangles()));
-    for (std::size_t t = 0; t < d.triangles.size(); ++t) {
-      for (int k = 0; k < 3; ++k) EXPECT_EQ(d.triangles[t][static_cast<std::size_t>(k)], static_cast<std::uint32_t>(surface.surface.triangles(static_cast<Index>(t), k)));
-    }
     for (std::uint32_t p = 0; p < d.pieces; ++p) EXPECT_EQ(d.colours[p], render::piece_colour(static_cast<Index>(p)));
-    // The page's placement of every vertex (weights times its copy's corners) is its rest
-    // position, to the weights' quantisation (a copy here is 1/3 across).
-    ASSERT_EQ(d.vertex_copy.size(), static_cast<std::size_t>(surface.surface.num_vertices()));
-    for (std::size_t v = 0; v < d.vertex_copy.size(); ++v) {
-      EXPECT_EQ(d.vertex_copy[v], static_cast<std::uint32_t>(surface.vertex_tet[v]));
-      Vec3 placed = Vec3::Zero();
-      for (int k = 0; k < 4; ++k) {
-        const auto node = d.copy_nodes[d.vertex_copy[v]][static_cast<std::size_t>(k)];
-        placed += d.weights[v][static_cast<std::size_t>(k)] * rest.row(cutter.node_parent()[node]).transpose();
+    EXPECT_EQ(d.triangles, static_cast<std::uint32_t>(surface.surface.num_triangles()));
+    // The patches, in tet order, list the surface's triangles in its order; the page's placement
+    // of each corner (weights times nodes) is the vertex's rest position, to the weights'
+    // quantisation (a copy here is 1/3 across).
+    Index row = 0;
+    std::uint32_t previous_tet = 0;
+    for (const auto& [tet, patch] : d.patches) {
+      EXPECT_TRUE(row == 0 || tet > previous_tet);
+      previous_tet = tet;
+      for (const auto& triangle : patch.triangles) {
+        ASSERT_LT(row, surface.surface.num_triangles());
+        EXPECT_EQ(static_cast<std::uint32_t>(cutter.tet_parent()[static_cast<std::size_t>(surface.triangle_tet[static_cast<std::size_t>(row)])]), tet);
+        for (int k = 0; k < 3; ++k) {
+          const std::uint32_t v = triangle[static_cast<std::size_t>(k)];
+          Vec3 placed = Vec3::Zero();
+          for (int c = 0; c < 4; ++c) {
+            placed += patch.weights[v][static_cast<std::size_t>(c)] * rest.row(cutter.node_parent()[patch.nodes[v][static_cast<std::size_t>(c)]]).transpose();
+          }
+          EXPECT_LT((placed - surface.surface.vertices.row(surface.surface.triangles(row, k)).transpose()).norm(), 2e-5) << row;
+        }
+        ++row;
       }
-      EXPECT_LT((placed - surface.surface.vertices.row(static_cast<Index>(v)).transpose()).norm(), 2e-5) << v;
+    }
+    EXPECT_EQ(row, surface.surface.num_triangles());
+  }
+}
+
+TEST(LiveProtocol, ATopologyChangeCarriesThePatchesThatChanged) {
+  const TetMesh block = make_grid(Box{}, {4, 4, 4}, 5);
+  Cutter cutter(block);
+  TopologyEncoder encoder;
+  const auto encode = [&](std::uint32_t version, Cutter& c) {
+    return encoder.encode(version, c.tet_nodes(), c.tet_parent(), node_pieces(c.tet_nodes(), c.num_nodes()), c.surface());
+  };
+  PagePatches page;
+  apply_topology(decode_topology(encode(1, cutter).full), &page);
+  // Two cuts, each sent as the change from the version before: applied to the page's patches,
+  // each gives what the whole topology of its version gives, in fewer bytes.
+  std::uint32_t version = 1;
+  for (const double x : {0.4, 0.7}) {
+    SCOPED_TRACE(x);
+    cutter.cut(plane_at_x(x));
+    const TopologyEncoder::Messages messages = encode(++version, cutter);
+    ASSERT_FALSE(messages.change.empty());
+    const DecodedTopology change = decode_topology(messages.change);
+    EXPECT_EQ(change.base, version - 1);
+    EXPECT_EQ(change.version, version);
+    EXPECT_LT(messages.change.size(), messages.full.size());
+    apply_topology(change, &page);
+    PagePatches whole;
+    apply_topology(decode_topology(messages.full), &whole);
+    EXPECT_EQ(page, whole);
+    // The cut's plane passes through one layer of tets: the patches of tets far from it are not sent.
+    for (const auto& [tet, patch] : change.patches) {
+      double low = 1, high = 0;
+      for (int k = 0; k < 4; ++k) {
+        low = std::min(low, block.rest()(block.tets()(tet, k), 0));
+        high = std::max(high, block.rest()(block.tets()(tet, k), 0));
+      }
+      EXPECT_TRUE(low <= x + 0.25 && high >= x - 0.25) << "tet " << tet << " spans x in [" << low << ", " << high << "]";
     }
   }
-  // 16-bit indices where the counts fit, whatever the others.
-  EXPECT_EQ(topology_layout(10, 65536, 65537).flags, kNarrowNodes | kNarrowCopies);
-  EXPECT_EQ(topology_layout(70000, 10, 10).flags, kNarrowNodes | kNarrowVertices);
+  // Back to the uncut block (a reset): the cut's patches inside the block are removed.
+  Cutter fresh(block);
+  const TopologyEncoder::Messages reset = encode(++version, fresh);
+  const DecodedTopology change = decode_topology(reset.change);
+  EXPECT_TRUE(std::any_of(change.patches.begin(), change.patches.end(), [](const auto& p) { return p.second.triangles.empty(); }));
+  apply_topology(change, &page);
+  PagePatches whole;
+  apply_topology(decode_topology(reset.full), &whole);
+  EXPECT_EQ(page, whole);
+  // A version that does not follow the last one has no change: the pages get it whole.
+  EXPECT_TRUE(encode(version + 2, fresh).change.empty());
 }
 
 }  // namespace

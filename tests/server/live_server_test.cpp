@@ -245,7 +245,14 @@ TEST_F(Served, AFrameOverTheLimitClosesThatPageOnly) {
 TEST_F(Served, AScalpelStrokeCutsTheBlockInTwoForEveryPage) {
   Client cutter(server_->port(), "/live?token=" + server_->token());
   Client watcher(server_->port(), "/live?token=" + server_->token());
-  EXPECT_EQ(watcher.read().kind(), 1u);
+  const Client::Message whole = watcher.read();
+  ASSERT_EQ(whole.kind(), 1u);
+  const auto word = [](const Client::Message& m, std::size_t i) {
+    std::uint32_t x = 0;
+    std::memcpy(&x, m.data.data() + 4 * i, 4);
+    return x;
+  };
+  EXPECT_EQ(word(whole, 2), 0u);  // base 0: the whole topology
   // A blade standing through the block, swept across it at mid-height.
   for (int i = 0; i <= 12; ++i) {
     const double x = -0.2 + 1.4 * i / 12.0;
@@ -253,12 +260,21 @@ TEST_F(Served, AScalpelStrokeCutsTheBlockInTwoForEveryPage) {
   }
   cutter.send(R"({"type": "lift"})");
   // The watcher gets a topology of two pieces.
-  std::uint32_t pieces = 0;
+  // The cuts come as changes, each from the version before (the watcher keeps up).
+  std::uint32_t pieces = 0, version = word(whole, 1);
+  int changes = 0;
   for (int i = 0; i < 3000 && pieces < 2; ++i) {
     const Client::Message m = watcher.read();
-    if (!m.text && m.kind() == 1) std::memcpy(&pieces, m.data.data() + 24, 4);
+    if (m.text || m.kind() != 1) continue;
+    pieces = word(m, 4);
+    if (word(m, 2) != 0) {
+      EXPECT_EQ(word(m, 2), version);
+      ++changes;
+    }
+    version = word(m, 1);
   }
   EXPECT_EQ(pieces, 2u);
+  EXPECT_GT(changes, 0);
   EXPECT_EQ(state()["pieces"], 2);
   // The recording replays: the scene with the events.
   const auto recording = get("/api/recording?token=" + server_->token());

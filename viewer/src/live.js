@@ -23,6 +23,9 @@ const api = {
   cutPhases: [],
   // Milliseconds the page spent reading each topology message, and drawing each frame.
   topologyMs: [], drawMs: [],
+  // The size of each topology message (bytes): whole when the page joins, the patches a cut
+  // changed after that.
+  topologyBytes: [],
 };
 const bladeSentAt = new Map();  // blade poses' seq -> when they left, until answered or stale
 const cutSentAt = new Map();    // topology version -> when the first pose it shows left
@@ -59,8 +62,8 @@ const blade = new THREE.Line(new THREE.BufferGeometry(), bladeMaterial);
 blade.visible = false;
 scene.add(blade);
 
-let topology = null;  // the arrays of the topology shown
-let pending = null;   // the latest topology message, until a frame of it arrives
+let topology = null;  // the latest topology: { version, nodeCount, nodePiece, pieces }
+let awaitingFrame = false;  // a topology changed the arrays and no frame of it has come yet
 let nodes = null;     // node positions of the latest frame (Float32Array, 3 per node)
 let framed = false;   // the camera has been aimed at the object
 let size = 1;         // the object's radius when first framed: the tools' scale
@@ -71,57 +74,164 @@ function fail(message) {
 }
 
 // --- messages --------------------------------------------------------------------------------
+// The material surface in patches, one per input tet, kept in ranges of shared arrays so that a
+// topology change rewrites only the patches it carries: O(changed patches) a cut, not O(surface).
+// A patch replaced by a larger one moves to the end; the ranges it leaves are dead (their
+// triangles degenerate, never drawn) until dead outweighs live, and then the arrays are packed.
+const patches = new Map();  // input tet -> { corners, weights, triangles (local), vertexAt, vertexRoom, triangleAt, triangleRoom }
+const arrays = { vertexRoom: 0, triangleRoom: 0, vertexEnd: 0, triangleEnd: 0, liveVertices: 0, liveTriangles: 0 };
+
+// New arrays of room for `vertexRoom` vertices and `triangleRoom` triangles, the live patches
+// packed at their start.
+function allocate(vertexRoom, triangleRoom) {
+  arrays.vertexRoom = vertexRoom;
+  arrays.triangleRoom = triangleRoom;
+  arrays.corners = new Uint32Array(4 * vertexRoom);
+  arrays.weights = new Float32Array(4 * vertexRoom);
+  arrays.colours = new Float32Array(3 * vertexRoom);
+  arrays.index = new Uint32Array(3 * triangleRoom);
+  arrays.vertexEnd = 0;
+  arrays.triangleEnd = 0;
+  for (const p of patches.values()) place(p, true);
+  const geometry = new THREE.BufferGeometry();
+  geometry.setAttribute('position', new THREE.BufferAttribute(new Float32Array(3 * vertexRoom), 3));
+  geometry.setAttribute('color', new THREE.BufferAttribute(arrays.colours, 3));
+  geometry.setIndex(new THREE.BufferAttribute(arrays.index, 1));
+  surface.geometry.dispose();
+  surface.geometry = geometry;
+}
+
+// Writes a patch into its ranges, or (`fresh`, or it does not fit) into new ones at the end.
+function place(p, fresh) {
+  const n = p.weights.length / 4, m = p.triangles.length / 3;
+  if (fresh || n > p.vertexRoom || m > p.triangleRoom) {
+    p.vertexAt = arrays.vertexEnd;
+    p.triangleAt = arrays.triangleEnd;
+    p.vertexRoom = n;
+    p.triangleRoom = m;
+    arrays.vertexEnd += n;
+    arrays.triangleEnd += m;
+  }
+  arrays.corners.set(p.corners, 4 * p.vertexAt);
+  arrays.weights.set(p.weights, 4 * p.vertexAt);
+  const index = arrays.index, local = p.triangles, at = 3 * p.triangleAt;
+  for (let k = 0; k < local.length; ++k) index[at + k] = local[k] + p.vertexAt;
+  clear(p, n, m);
+}
+
+// Makes a patch's ranges from vertex `n` and triangle `m` on dead: degenerate triangles, and
+// vertices on node 0 with no weight.
+function clear(p, n, m) {
+  arrays.index.fill(0, 3 * (p.triangleAt + m), 3 * (p.triangleAt + p.triangleRoom));
+  arrays.corners.fill(0, 4 * (p.vertexAt + n), 4 * (p.vertexAt + p.vertexRoom));
+  arrays.weights.fill(0, 4 * (p.vertexAt + n), 4 * (p.vertexAt + p.vertexRoom));
+}
+
 function readTopology(buffer) {
-  const header = new Uint32Array(buffer, 0, 8);
-  const [, version, copies, nodeCount, vertices, triangles, pieces, flags] = header;
-  let offset = 32;
+  if (buffer.byteLength < 40) fail('a topology message is shorter than its header');
+  const [, version, base, nodeCount, pieces, patchCount, vertices, triangles, flags] = new Uint32Array(buffer, 0, 10);
+  if (base !== 0 && base !== topology?.version) fail(`a topology change from version ${base}, but the page has ${topology?.version}`);
+  let offset = 40;
   const take = (Type, count) => {
     if (offset + count * Type.BYTES_PER_ELEMENT > buffer.byteLength) fail('a topology message is shorter than its counts');
     const array = new Type(buffer, offset, count);
     offset += Math.ceil((count * Type.BYTES_PER_ELEMENT) / 4) * 4;  // sections are 4-byte aligned
     return array;
   };
-  // 16-bit indices where the flags say the count fits (see live_protocol.hpp).
-  const narrow = (flag) => (flags & flag ? Uint16Array : Uint32Array);
-  const nodeIndex = narrow(1), copyIndex = narrow(2), vertexIndex = narrow(4);
-  const t = {
-    version, pieces, nodeCount, vertices,
-    copyNodes: take(nodeIndex, 4 * copies),
-    nodePiece: take(nodeIndex, nodeCount),
-    vertexCopy: take(copyIndex, vertices),
-    quantisedWeights: take(Uint16Array, 3 * vertices),
-    triangles: take(vertexIndex, 3 * triangles),
-    pieceColours: take(Uint8Array, 4 * pieces),
-  };
-  // Each vertex's four nodes and weights, once, so that a frame costs 12 multiply-adds a vertex.
-  t.corners = new Uint32Array(4 * vertices);
-  t.weights = new Float32Array(4 * vertices);
-  const colours = new Float32Array(3 * vertices);
-  for (let v = 0; v < vertices; ++v) {
-    const copy = t.vertexCopy[v];
-    if (copy >= copies) fail(`vertex ${v} names tet copy ${copy} of ${copies}`);
-    let rest = 1;
-    for (let k = 0; k < 4; ++k) {
-      const node = t.copyNodes[4 * copy + k];
-      if (node >= nodeCount) fail(`a tet copy names node ${node} of ${nodeCount}`);
-      t.corners[4 * v + k] = node;
-      const w = k < 3 ? t.quantisedWeights[3 * v + k] / 65535 : rest;
-      t.weights[4 * v + k] = w;
-      rest -= w;
+  // 16-bit indices where the flags say so (see live_protocol.hpp).
+  const nodeIndex = flags & 1 ? Uint16Array : Uint32Array;
+  const nodePiece = take(nodeIndex, nodeCount).slice();
+  const pieceColours = take(Uint8Array, 4 * pieces).slice();
+  // The patches the message carries, read and checked before anything changes.
+  const carried = [];
+  for (let i = 0; i < patchCount; ++i) {
+    const [tet, n, m] = take(Uint32Array, 3);
+    if (m === 0) {
+      if (n !== 0) fail(`a patch of ${n} vertices and no triangles`);
+      carried.push([tet, null]);
+      continue;
     }
-    const piece = t.nodePiece[t.corners[4 * v]];
-    if (piece >= pieces) fail(`a node is in piece ${piece} of ${pieces}`);
-    for (let c = 0; c < 3; ++c) colours[3 * v + c] = linearOf[t.pieceColours[4 * piece + c]];
+    // Each vertex's four nodes and weights, once, so that a frame costs 12 multiply-adds a vertex.
+    const corners = Uint32Array.from(take(nodeIndex, 4 * n));
+    for (let k = 0; k < corners.length; ++k) if (corners[k] >= nodeCount) fail(`tet ${tet}'s patch names node ${corners[k]} of ${nodeCount}`);
+    const quantised = take(Uint16Array, 3 * n);
+    const weights = new Float32Array(4 * n);
+    for (let v = 0; v < n; ++v) {
+      let rest = 1;
+      for (let k = 0; k < 3; ++k) {
+        const w = quantised[3 * v + k] / 65535;
+        weights[4 * v + k] = w;
+        rest -= w;
+      }
+      weights[4 * v + 3] = rest;
+    }
+    const local = take(flags & 2 && n <= 65536 ? Uint16Array : Uint32Array, 3 * m).slice();
+    for (let k = 0; k < local.length; ++k) if (local[k] >= n) fail(`a triangle of tet ${tet}'s patch names vertex ${local[k]} of ${n}`);
+    carried.push([tet, { corners, weights, triangles: local }]);
   }
-  const tri = t.triangles;
-  for (let i = 0; i < tri.length; ++i) if (tri[i] >= vertices) fail(`a triangle names vertex ${tri[i]} of ${vertices}`);
+  if (offset !== buffer.byteLength) fail('a topology message is longer than its counts');
+  for (const [tet, p] of carried) if (!p && !(base !== 0 && patches.has(tet))) fail(`a topology removes tet ${tet}'s patch, which the page does not have`);
 
-  t.geometry = new THREE.BufferGeometry();
-  t.geometry.setAttribute('position', new THREE.BufferAttribute(new Float32Array(3 * vertices), 3));
-  t.geometry.setAttribute('color', new THREE.BufferAttribute(colours, 3));
-  t.geometry.setIndex(new THREE.BufferAttribute(t.triangles, 1));
-  // Shown from the first frame of it on; until then the old surface stays (no blank frame).
-  pending = t;
+  // Apply: the patches that fit their ranges in place, the others at the end (packing first when
+  // the dead ranges would outweigh the live ones, or the room runs out).
+  if (base === 0) {
+    patches.clear();
+    arrays.liveVertices = 0;
+    arrays.liveTriangles = 0;
+  }
+  let growVertices = 0, growTriangles = 0;
+  for (const [tet, p] of carried) {
+    const old = patches.get(tet);
+    if (old) {
+      arrays.liveVertices -= old.weights.length / 4;
+      arrays.liveTriangles -= old.triangles.length / 3;
+    }
+    if (!p) {
+      if (old) clear(old, 0, 0);
+      patches.delete(tet);
+      continue;
+    }
+    arrays.liveVertices += p.weights.length / 4;
+    arrays.liveTriangles += p.triangles.length / 3;
+    if (old) Object.assign(p, { vertexAt: old.vertexAt, vertexRoom: old.vertexRoom, triangleAt: old.triangleAt, triangleRoom: old.triangleRoom });
+    else Object.assign(p, { vertexAt: 0, vertexRoom: 0, triangleAt: 0, triangleRoom: 0 });
+    if (p.weights.length / 4 > p.vertexRoom || p.triangles.length / 3 > p.triangleRoom) {
+      if (old) clear(old, 0, 0);
+      growVertices += p.weights.length / 4;
+      growTriangles += p.triangles.length / 3;
+      p.moves = true;
+    }
+    patches.set(tet, p);
+  }
+  if (arrays.liveVertices !== vertices || arrays.liveTriangles !== triangles) {
+    fail(`the patches hold ${arrays.liveVertices} vertices and ${arrays.liveTriangles} triangles, the message says ${vertices} and ${triangles}`);
+  }
+  const ends = [arrays.vertexEnd + growVertices, arrays.triangleEnd + growTriangles];
+  if (base === 0 || ends[0] > arrays.vertexRoom || ends[1] > arrays.triangleRoom || ends[0] > 2 * vertices + 1024 || ends[1] > 2 * triangles + 1024) {
+    for (const p of patches.values()) delete p.moves;
+    allocate(Math.ceil(1.25 * vertices) + 1024, Math.ceil(1.25 * triangles) + 1024);  // every patch placed afresh
+  } else {
+    for (const [, p] of carried) {
+      if (!p) continue;
+      place(p, p.moves === true);
+      delete p.moves;
+    }
+  }
+
+  // Colours by piece (a cut renumbers the pieces), and the ranges to draw.
+  const colours = arrays.colours, corners = arrays.corners;
+  for (let v = 0; v < arrays.vertexEnd; ++v) {
+    const piece = nodePiece[corners[4 * v]];
+    if (piece >= pieces) fail(`a node is in piece ${piece} of ${pieces}`);
+    for (let c = 0; c < 3; ++c) colours[3 * v + c] = linearOf[pieceColours[4 * piece + c]];
+  }
+  const geometry = surface.geometry;
+  geometry.getAttribute('color').needsUpdate = true;
+  geometry.index.needsUpdate = true;
+  geometry.setDrawRange(0, 3 * arrays.triangleEnd);
+  topology = { version, pieces, nodeCount, nodePiece };
+  // Not drawn until a frame of it places the new vertices (until then the old picture stays).
+  awaitingFrame = true;
   api.topologies += 1;
   api.version = version;
   api.pieces = pieces;
@@ -129,22 +239,6 @@ function readTopology(buffer) {
 
 function readFrame(buffer) {
   const [, version, , nodeCount, pieces] = new Uint32Array(buffer, 0, 6);
-  if (pending && version === pending.version) {
-    surface.geometry.dispose();
-    surface.geometry = pending.geometry;
-    topology = pending;
-    pending = null;
-    // Seen: the cuts this topology shows (and any an older one showed, dropped unseen).
-    for (const [v, sentAt] of cutSentAt) {
-      if (v > topology.version) continue;
-      const now = performance.now();
-      api.cutLatencies.push(now - sentAt);
-      const reply = cutReplyAt.get(v) ?? topologyArrivedAt;
-      api.cutPhases.push([reply - sentAt, topologyArrivedAt - reply, topologyReadAt - topologyArrivedAt, now - topologyReadAt]);
-      cutSentAt.delete(v);
-      cutReplyAt.delete(v);
-    }
-  }
   if (!topology || version !== topology.version) return;  // a frame of a topology not seen yet
   if (nodeCount !== topology.nodeCount) fail('a frame has a different number of nodes than its topology');
   const boxes = new Float32Array(buffer, 32, 6 * pieces);
@@ -156,8 +250,8 @@ function readFrame(buffer) {
     for (let c = 0; c < 3; ++c) nodes[3 * n + c] = boxes[b + c] + q[3 * n + c] * boxes[b + 3 + c];
   }
   const position = surface.geometry.getAttribute('position');
-  const out = position.array, w = topology.weights, corner = topology.corners;
-  for (let v = 0; v < topology.vertices; ++v) {
+  const out = position.array, w = arrays.weights, corner = arrays.corners;
+  for (let v = 0; v < arrays.vertexEnd; ++v) {
     let x = 0, y = 0, z = 0;
     for (let k = 0; k < 4; ++k) {
       const weight = w[4 * v + k], node = 3 * corner[4 * v + k];
@@ -174,12 +268,35 @@ function readFrame(buffer) {
   surface.geometry.boundingBox = null;
   surface.visible = true;
   api.framesReceived += 1;
+  if (awaitingFrame) {
+    awaitingFrame = false;
+    // Seen: the cuts this topology shows (and any an older one showed, dropped unseen).
+    for (const [v, sentAt] of cutSentAt) {
+      if (v > topology.version) continue;
+      const now = performance.now();
+      api.cutLatencies.push(now - sentAt);
+      const reply = cutReplyAt.get(v) ?? topologyArrivedAt;
+      api.cutPhases.push([reply - sentAt, topologyArrivedAt - reply, topologyReadAt - topologyArrivedAt, now - topologyReadAt]);
+      cutSentAt.delete(v);
+      cutReplyAt.delete(v);
+    }
+  }
   if (!framed) {
-    surface.geometry.computeBoundingBox();
-    size = frameBox(view, surface.geometry.boundingBox, 35, 10).radius;
+    size = frameBox(view, liveBox(), 35, 10).radius;
     framed = true;
   }
   dirty = true;
+}
+
+// The bounds of the drawn triangles' corners (dead vertices, at the origin, left out). O(F).
+function liveBox() {
+  const box = new THREE.Box3(), p = new THREE.Vector3();
+  const index = arrays.index, position = surface.geometry.getAttribute('position').array;
+  for (let i = 0; i < 3 * arrays.triangleEnd; i += 3) {
+    if (index[i] === index[i + 1] && index[i] === index[i + 2]) continue;  // dead
+    for (let k = 0; k < 3; ++k) box.expandByPoint(p.fromArray(position, 3 * index[i + k]));
+  }
+  return box;
 }
 
 const ui = {
@@ -246,6 +363,7 @@ socket.addEventListener('message', (event) => {
   const kind = new Uint32Array(event.data, 0, 1)[0];
   if (kind === 1) {
     topologyArrivedAt = performance.now();
+    if (api.topologyBytes.length < 10000) api.topologyBytes.push(event.data.byteLength);
     readTopology(event.data);
     topologyReadAt = performance.now();
     api.topologyMs.push(topologyReadAt - topologyArrivedAt);
@@ -472,13 +590,12 @@ api.hitAt = (x, y) => {
 };
 api.surfaceBox = () => {
   if (!surface.visible) return null;
-  surface.geometry.computeBoundingBox();
-  const { min, max } = surface.geometry.boundingBox;
+  const { min, max } = liveBox();
   return { min: xyz(min), max: xyz(max) };
 };
 
 function animate() {
-  if (dirty) {
+  if (dirty && !awaitingFrame) {
     const start = performance.now();
     view.draw();
     view.renderer.getContext().finish();  // the drawing's own time, not the next frame's

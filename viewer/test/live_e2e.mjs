@@ -222,7 +222,11 @@ const phases = await live(() => window.tetcutLive.cutPhases);
 const phase = (k) => median(phases.map((row) => row[k])).toFixed(0);
 console.log(`     of which (medians): pose to the server's "cut" reply ${phase(0)} ms, to its topology arriving ${phase(1)} ms, ` +
             `reading it ${phase(2)} ms, to its first frame ${phase(3)} ms`);
-const pageTimes = await live(() => ({ topology: window.tetcutLive.topologyMs, draw: window.tetcutLive.drawMs }));
+const pageTimes = await live(() => ({ topology: window.tetcutLive.topologyMs, draw: window.tetcutLive.drawMs, bytes: window.tetcutLive.topologyBytes }));
+console.log(`     topology messages: the first ${(pageTimes.bytes[0] / 1e6).toFixed(2)} MB (whole), then ${pageTimes.bytes.length - 1} changes ` +
+            `of ${(median(pageTimes.bytes.slice(1)) / 1e3).toFixed(1)} KB (median; max ${(Math.max(...pageTimes.bytes.slice(1)) / 1e3).toFixed(1)} KB)`);
+// (A page that falls behind gets a whole topology again, so this looks at the median.)
+check(pageTimes.bytes.length > 1 && median(pageTimes.bytes.slice(1)) < 0.1 * pageTimes.bytes[0], 'cuts were sent as changes, a small part of the whole topology');
 console.log(`     the page: ${median(pageTimes.topology).toFixed(1)} ms to read a topology (median), ` +
             `${median(pageTimes.draw).toFixed(1)} ms to draw a frame (median; SwiftShader, no GPU)`);
 
