@@ -167,11 +167,10 @@ TopologyEncoder::Messages TopologyEncoder::encode(std::uint32_t version, const s
   // 1. Each input tet's patch as it is now: its triangles are consecutive (the surface lists
   //    them by input tet), its vertices numbered in order of first use. O(V + F).
   // All patches in one buffer (no allocation per patch), `offsets[tet]..offsets[tet + 1]`.
-  std::string now;
-  now.reserve(bytes_.size() + bytes_.size() / 4);
-  std::vector<std::size_t> offsets;
-  offsets.reserve(offsets_.size());
-  offsets.push_back(0);
+  std::string& now = next_bytes_;
+  std::vector<std::size_t>& offsets = next_offsets_;
+  now.clear();
+  offsets.assign(1, 0);
   const auto close_patches_up_to = [&](std::size_t tet) {
     while (offsets.size() <= tet) offsets.push_back(now.size());
   };
@@ -194,29 +193,49 @@ TopologyEncoder::Messages TopologyEncoder::encode(std::uint32_t version, const s
         }
       }
     }
-    std::string& out = now;
+    // The patch's size is known before it is written: one resize, then plain stores (a string
+    // append a value costs several times more over ~10^5 values a cut).
     const bool narrow_local = !wide_ && vertices.size() <= std::size_t{1} << 16;
-    for (const std::uint32_t x : {static_cast<std::uint32_t>(tet), static_cast<std::uint32_t>(vertices.size()), static_cast<std::uint32_t>(end - first)}) {
-      put(out, x);
-    }
+    const std::size_t nv = vertices.size(), nt = static_cast<std::size_t>(end - first);
+    const auto round4 = [](std::size_t bytes) { return (bytes + 3) / 4 * 4; };
+    const std::size_t start = now.size();
+    now.resize(start + 12 + round4(nv * 4 * (narrow_nodes ? 2 : 4)) + round4(nv * 6) + round4(nt * 3 * (narrow_local ? 2 : 4)));
+    char* out = now.data() + start;
+    const auto store = [&out](auto value) {
+      std::memcpy(out, &value, sizeof value);
+      out += sizeof value;
+    };
+    const auto store_index = [&](bool narrow, std::size_t i) {
+      if (narrow) {
+        store(static_cast<std::uint16_t>(i));
+      } else {
+        store(static_cast<std::uint32_t>(i));
+      }
+    };
+    const auto align = [&] {
+      while ((out - now.data() - static_cast<std::ptrdiff_t>(start)) % 4 != 0) *out++ = '\0';
+    };
+    for (const std::size_t x : {static_cast<std::size_t>(tet), nv, nt}) store(static_cast<std::uint32_t>(x));
     for (const Index v : vertices) {
       for (const Index n : copy_nodes[static_cast<std::size_t>(surface.vertex_tet[static_cast<std::size_t>(v)])]) {
-        put_index(out, narrow_nodes, static_cast<std::size_t>(n));
+        store_index(narrow_nodes, static_cast<std::size_t>(n));
       }
     }
-    pad4(out);
+    align();
     // Weights 0..2 in units of 1/65535: a vertex is placed within 1e-5 of its copy's size, and
     // its weights take 6 bytes, not 16.
     for (const Index v : vertices) {
       for (int k = 0; k < 3; ++k) {
-        put(out, static_cast<std::uint16_t>(std::lround(std::clamp(surface.vertex_weights(v, k), 0.0, 1.0) * 65535.0)));
+        // Rounded to nearest (non-negative, so + 0.5 and truncation; lround is a call).
+        store(static_cast<std::uint16_t>(std::clamp(surface.vertex_weights(v, k), 0.0, 1.0) * 65535.0 + 0.5));
       }
     }
-    pad4(out);
+    align();
     for (Index t = first; t < end; ++t) {
-      for (int k = 0; k < 3; ++k) put_index(out, narrow_local, static_cast<std::size_t>(local_[static_cast<std::size_t>(s.triangles(t, k))]));
+      for (int k = 0; k < 3; ++k) store_index(narrow_local, static_cast<std::size_t>(local_[static_cast<std::size_t>(s.triangles(t, k))]));
     }
-    pad4(out);
+    align();
+    if (out != now.data() + now.size()) broken("live protocol", "a patch's size was miscounted");
     for (const Index v : vertices) local_[static_cast<std::size_t>(v)] = -1;
     total_vertices += vertices.size();
     total_triangles += static_cast<std::size_t>(end - first);
@@ -272,8 +291,8 @@ TopologyEncoder::Messages TopologyEncoder::encode(std::uint32_t version, const s
       }
     }
   }
-  bytes_ = std::move(now);
-  offsets_ = std::move(offsets);
+  std::swap(bytes_, now);  // the buffers are kept: no allocation and page faults per cut
+  std::swap(offsets_, offsets);
   last_version_ = version;
   return messages;
 }

@@ -113,8 +113,8 @@ class TopologyEncoder {
   std::uint32_t last_version_ = 0;
   // The patches as encoded last, one after another: tet t's is bytes_[offsets_[t], offsets_[t + 1])
   // (empty: none).
-  std::string bytes_;
-  std::vector<std::size_t> offsets_;
+  std::string bytes_, next_bytes_;
+  std::vector<std::size_t> offsets_, next_offsets_;
   std::vector<std::int32_t> local_;   // per surface vertex: its index in the patch being encoded
 };
 
