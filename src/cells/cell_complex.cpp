@@ -222,58 +222,58 @@ struct SidesSeen {
 
 }  // namespace
 
-int CellComplex::classify(CellId cell, PlaneId plane) const {
+int CellComplex::classify(CellId cell, PlaneId plane, registry::IntersectionRegistry::SideMemo* memo) const {
   SidesSeen seen;
   for (const FacetId f : cells_[cell].facets) {
     for (const Corner& corner : facets_[f].corners) {
-      seen.add(registry_->side(corner.vertex, plane));
+      seen.add(registry_->side(corner.vertex, plane, memo));
       if (seen.both()) return 0;
     }
   }
   return seen.classification();
 }
 
-bool CellComplex::facet_on_plane(FacetId facet, PlaneId plane) const {
+bool CellComplex::facet_on_plane(FacetId facet, PlaneId plane, registry::IntersectionRegistry::SideMemo* memo) const {
   if (facets_[facet].plane == plane) return true;
   for (const Corner& corner : facets_[facet].corners) {
-    if (registry_->side(corner.vertex, plane) != 0) return false;
+    if (registry_->side(corner.vertex, plane, memo) != 0) return false;
   }
   return true;
 }
 
-int CellComplex::classify_facet(FacetId facet, PlaneId plane) const {
+int CellComplex::classify_facet(FacetId facet, PlaneId plane, registry::IntersectionRegistry::SideMemo* memo) const {
   SidesSeen seen;
-  for (const Corner& corner : facets_[facet].corners) seen.add(registry_->side(corner.vertex, plane));
+  for (const Corner& corner : facets_[facet].corners) seen.add(registry_->side(corner.vertex, plane, memo));
   return seen.classification();
 }
 
-bool CellComplex::section_overlaps_triangle(CellId cell) const {
+bool CellComplex::section_overlaps_triangle(const Insertion& in, CellId cell) const {
   // The section S of the cell by the triangle's plane and the triangle T are convex polygons in
   // that plane; their interiors meet unless a line through an edge of one separates them.
   // Edges of S lie on the cell's facet planes: T wholly outside one of them (touching allowed).
   for (const FacetId f : cells_[cell].facets) {
     const PlaneId plane = facets_[f].plane;
     const int outward = facets_[f].back == cell ? 1 : -1;
-    if (corner_side(0, plane) * outward >= 0 && corner_side(1, plane) * outward >= 0 &&
-        corner_side(2, plane) * outward >= 0) {
+    if (corner_side(in, 0, plane) * outward >= 0 && corner_side(in, 1, plane) * outward >= 0 &&
+        corner_side(in, 2, plane) * outward >= 0) {
       return false;
     }
   }
   // Edges of T lie on the walls: S wholly outside one of them. The corners of S are the cell's
   // vertices on the plane and the points where its edges cross it (not registered: most cells
   // tested here are not split).
-  const PlaneId plane = insertion().triangle->plane.id;
-  for (const OrientedPlane& wall : insertion().triangle->walls) {
+  const PlaneId plane = in.triangle->plane.id;
+  for (const OrientedPlane& wall : in.triangle->walls) {
     bool outside = true;
     for (const FacetId f : cells_[cell].facets) {
       const auto& corners = facets_[f].corners;
       const std::size_t n = corners.size();
       for (std::size_t i = 0; i < n && outside; ++i) {
         const VertexId u = corners[i].vertex, v = corners[(i + 1) % n].vertex;
-        const int su = registry_->side(u, plane);
+        const int su = registry_->side(u, plane, in.memo);
         if (su == 0) {
-          outside = registry_->side(u, wall.id) * wall.sign <= 0;
-        } else if (su * registry_->side(v, plane) < 0) {
+          outside = registry_->side(u, wall.id, in.memo) * wall.sign <= 0;
+        } else if (su * registry_->side(v, plane, in.memo) < 0) {
           const Edge& edge = edges_[corners[i].edge];
           outside = registry_->side_of_meet(edge.line[0], edge.line[1], plane, wall.id) * wall.sign <= 0;
         }
@@ -285,8 +285,8 @@ bool CellComplex::section_overlaps_triangle(CellId cell) const {
   return true;
 }
 
-int CellComplex::corner_side(int k, PlaneId plane) const {
-  const PreparedTriangle& t = *insertion().triangle;
+int CellComplex::corner_side(const Insertion& in, int k, PlaneId plane) const {
+  const PreparedTriangle& t = *in.triangle;
   if (t.corners_are_inputs) return registry_->side_of_input(plane, t.corners[k]);
   return registry_->side_of_meet(t.plane.id, t.walls[k].id, t.walls[(k + 2) % 3].id, plane);
 }
@@ -321,8 +321,8 @@ bool tet_may_meet_triangle(const std::array<Vec3, 4>& x, const geometry::Plane& 
   return true;
 }
 
-bool CellComplex::tet_may_be_cut(Index tet) const {
-  const PreparedTriangle& t = *insertion().triangle;
+bool CellComplex::tet_may_be_cut(const Insertion& in, Index tet) const {
+  const PreparedTriangle& t = *in.triangle;
   std::array<Vec3, 4> x;
   for (int k = 0; k < 4; ++k) x[k] = mesh_->rest().row(mesh_->tets()(tet, k)).transpose();
   const geometry::Plane& plane = registry_->plane(t.plane.id);
@@ -339,18 +339,18 @@ bool CellComplex::tet_may_be_cut(Index tet) const {
 
 // ---- Splitting ---------------------------------------------------------------------------------
 
-void CellComplex::touch(Index tet) {
-  if (tet_touch_stamp_[tet] == insertion().stamp) return;
-  tet_touch_stamp_[tet] = insertion().stamp;
-  if (insertion().touched != nullptr) insertion().touched->push_back(tet);
+void CellComplex::touch(const Insertion& in, Index tet) {
+  if (tet_touch_stamp_[tet] == in.stamp) return;
+  tet_touch_stamp_[tet] = in.stamp;
+  if (in.touched != nullptr) in.touched->push_back(tet);
 }
 
-void CellComplex::touch_side(Side s) {
+void CellComplex::touch_side(const Insertion& in, Side s) {
   const Index tet = tet_of(s);
-  if (tet >= 0) touch(tet);
+  if (tet >= 0) touch(in, tet);
 }
 
-void CellComplex::insert_on_edge(EdgeId e, VertexId w) {
+void CellComplex::insert_on_edge(Insertion& in, EdgeId e, VertexId w) {
   const VertexId a = edges_[e].a, b = edges_[e].b;
   const EdgeId second = add_edge(w, b, edges_[e].line, edges_[e].mesh_edge);
   edges_[e].b = w;
@@ -367,12 +367,12 @@ void CellComplex::insert_on_edge(EdgeId e, VertexId w) {
       corners[i].edge = second;
       corners.insert(corners.begin() + static_cast<std::ptrdiff_t>(i + 1), Corner{w, e});
     }
-    touch_side(facets_[f].front);
-    touch_side(facets_[f].back);
+    touch_side(in, facets_[f].front);
+    touch_side(in, facets_[f].back);
   }
 }
 
-FacetId CellComplex::split_facet(FacetId f, PlaneId plane, CellId cell, CellId negative_cell) {
+FacetId CellComplex::split_facet(Insertion& in, FacetId f, PlaneId plane, CellId cell, CellId negative_cell) {
   // The corners are moved out (the facet gets its positive part back below), so that neither they
   // nor the copy of the facet for its negative part cost an allocation.
   const std::vector<Corner> corners = std::move(facets_[f].corners);
@@ -382,8 +382,8 @@ FacetId CellComplex::split_facet(FacetId f, PlaneId plane, CellId cell, CellId n
   // now: `rise` is followed by the positive run, `fall` by the negative run.
   std::size_t rise = n, fall = n;
   for (std::size_t i = 0; i < n; ++i) {
-    if (registry_->side(corners[i].vertex, plane) != 0) continue;
-    const int next = registry_->side(corners[(i + 1) % n].vertex, plane);
+    if (registry_->side(corners[i].vertex, plane, in.memo) != 0) continue;
+    const int next = registry_->side(corners[(i + 1) % n].vertex, plane, in.memo);
     if (next > 0) rise = (rise == n) ? i : n + 1;
     if (next < 0) fall = (fall == n) ? i : n + 1;
   }
@@ -420,37 +420,37 @@ FacetId CellComplex::split_facet(FacetId f, PlaneId plane, CellId cell, CellId n
   for (const Side side : {facets_[g].front, facets_[g].back}) {
     if (cell >= 0 && side == negative_cell) continue;
     if (is_cell(side)) cells_[side].facets.push_back(g);
-    touch_side(side);
+    touch_side(in, side);
   }
   return g;
 }
 
-void CellComplex::mark_crossings(FacetId f, PlaneId plane) {
+void CellComplex::mark_crossings(Insertion& in, FacetId f, PlaneId plane) {
   for (std::size_t i = 0; i < facets_[f].corners.size(); ++i) {
     const std::size_t n = facets_[f].corners.size();
     const Corner corner = facets_[f].corners[i];
     const VertexId next = facets_[f].corners[(i + 1) % n].vertex;
-    if (registry_->side(corner.vertex, plane) * registry_->side(next, plane) < 0) {
+    if (registry_->side(corner.vertex, plane, in.memo) * registry_->side(next, plane, in.memo) < 0) {
       const Edge& edge = edges_[corner.edge];
-      insert_on_edge(corner.edge, registry_->add_point(edge.line[0], edge.line[1], plane));
+      insert_on_edge(in, corner.edge, registry_->add_point(edge.line[0], edge.line[1], plane));
     }
   }
 }
 
-FacetId CellComplex::split_facet_in_plane(FacetId f, PlaneId plane) {
-  mark_crossings(f, plane);
-  return split_facet(f, plane, -1, -1);
+FacetId CellComplex::split_facet_in_plane(Insertion& in, FacetId f, PlaneId plane) {
+  mark_crossings(in, f, plane);
+  return split_facet(in, f, plane, -1, -1);
 }
 
-CellId CellComplex::split(CellId cell, PlaneId plane, FacetId* section) {
-  if (classify(cell, plane) != 0) return -1;
+CellId CellComplex::split(Insertion& in, CellId cell, PlaneId plane, FacetId* section) {
+  if (classify(cell, plane, in.memo) != 0) return -1;
   // Moved out: the cell gets its positive facets back at the end, and nothing reads its list
   // meanwhile (split_facet adds new parts to the other side's list only).
   const std::vector<FacetId> old_facets = std::move(cells_[cell].facets);
   cells_[cell].facets.clear();
 
   // 1. A vertex on every edge of the cell that crosses the plane, in every facet around that edge.
-  for (const FacetId f : old_facets) mark_crossings(f, plane);
+  for (const FacetId f : old_facets) mark_crossings(in, f, plane);
 
   // 2. The negative part, linked after the cell in its tet's list.
   CellId negative_cell = -1;
@@ -465,7 +465,7 @@ CellId CellComplex::split(CellId cell, PlaneId plane, FacetId* section) {
     cells_[cell].box_min = {1, 1, 1};  // the positive part is smaller now: recompute when asked
     cells_[cell].box_max = {0, 0, 0};
   }
-  touch(cells_[cell].tet);
+  touch(in, cells_[cell].tet);
 
   // 3. Distribute the facets, splitting those that cross. Collect the section's edges, directed
   //    as the positive cell's outward facets run along them (that is the section's own
@@ -479,10 +479,10 @@ CellId CellComplex::split(CellId cell, PlaneId plane, FacetId* section) {
   for (const FacetId f : old_facets) {
     const bool cell_is_back = facets_[f].back == cell;
     SidesSeen seen;
-    for (const Corner& corner : facets_[f].corners) seen.add(registry_->side(corner.vertex, plane));
+    for (const Corner& corner : facets_[f].corners) seen.add(registry_->side(corner.vertex, plane, in.memo));
     const bool negative = seen.negative;
     if (seen.both()) {
-      negative_facets.push_back(split_facet(f, plane, cell, negative_cell));
+      negative_facets.push_back(split_facet(in, f, plane, cell, negative_cell));
       positive_facets.push_back(f);
       // The chord closes the positive part: stored from its last corner to its first.
       const auto& corners = facets_[f].corners;
@@ -504,7 +504,7 @@ CellId CellComplex::split(CellId cell, PlaneId plane, FacetId* section) {
     const std::size_t n = corners.size();
     for (std::size_t i = 0; i < n; ++i) {
       const VertexId u = corners[i].vertex, v = corners[(i + 1) % n].vertex;
-      if (registry_->side(u, plane) != 0 || registry_->side(v, plane) != 0) continue;
+      if (registry_->side(u, plane, in.memo) != 0 || registry_->side(v, plane, in.memo) != 0) continue;
       const bool stored_direction = cell_is_back != negative;
       section_edges.push_back(stored_direction ? Directed{u, v, corners[i].edge} : Directed{v, u, corners[i].edge});
     }
@@ -552,60 +552,60 @@ CellId CellComplex::split(CellId cell, PlaneId plane, FacetId* section) {
 
 // ---- Insertion ---------------------------------------------------------------------------------
 
-void CellComplex::cover(FacetId f) {
+void CellComplex::cover(Insertion& in, FacetId f) {
   Facet& facet = facets_[f];
-  if (facet.stamp == insertion().stamp) return;
-  facet.stamp = insertion().stamp;
-  if (facet.covering < 0) facet.covering = insertion().stamp;
-  const OrientedPlane& plane = insertion().triangle->plane;
+  if (facet.stamp == in.stamp) return;
+  facet.stamp = in.stamp;
+  if (facet.covering < 0) facet.covering = in.stamp;
+  const OrientedPlane& plane = in.triangle->plane;
   // The facet lies on the plane (its corners do, exactly); only the orientation is left, the sign
   // of the two normals' dot product, which is far from zero for equal planes.
   const int alignment = facet.plane == plane.id ? 1 : registry_->normal_alignment(facet.plane, plane.id);
   if (alignment == 0) broken("cell complex", "a covered facet is not on the cut plane");
   facet.winding += alignment * plane.sign;
-  touch_side(facet.front);
-  touch_side(facet.back);
+  touch_side(in, facet.front);
+  touch_side(in, facet.back);
 }
 
-bool CellComplex::cover_inside(FacetId f, CellId cell) {
+bool CellComplex::cover_inside(Insertion& in, FacetId f, CellId cell) {
   // The facet lies on the triangle's plane; the triangle there is the part inside its three walls.
-  if (facets_[f].stamp == insertion().stamp) return false;
-  if (insertion().front_covers_faces && facets_[f].mesh_face >= 0 && facets_[f].back == cell &&
+  if (facets_[f].stamp == in.stamp) return false;
+  if (in.front_covers_faces && facets_[f].mesh_face >= 0 && facets_[f].back == cell &&
       side_is_material(facets_[f].front)) {
     return false;  // the front side's tet covers it, before or after this one
   }
   bool changed = false;
   FacetId inside = f;
-  for (const OrientedPlane& wall : insertion().triangle->walls) {
-    const int position = classify_facet(inside, wall.id) * wall.sign;
+  for (const OrientedPlane& wall : in.triangle->walls) {
+    const int position = classify_facet(inside, wall.id, in.memo) * wall.sign;
     if (position == -1) return changed;  // outside the triangle, or touching its edge
     if (position != 0) continue;
-    const FacetId negative = split_facet_in_plane(inside, wall.id);
+    const FacetId negative = split_facet_in_plane(in, inside, wall.id);
     changed = true;
     if (wall.sign < 0) inside = negative;
   }
-  cover(inside);
+  cover(in, inside);
   return true;
 }
 
-bool CellComplex::process_cell(CellId cell) {
-  const PlaneId plane = insertion().triangle->plane.id;
-  if (classify(cell, plane) == 0) {
+bool CellComplex::process_cell(Insertion& in, CellId cell) {
+  const PlaneId plane = in.triangle->plane.id;
+  if (classify(cell, plane, in.memo) == 0) {
     // The plane crosses the cell: split it there when the triangle covers part of the section.
-    if (!section_overlaps_triangle(cell)) return false;
+    if (!section_overlaps_triangle(in, cell)) return false;
     FacetId section = -1;
-    split(cell, plane, &section);
-    cover_inside(section, cell);
+    split(in, cell, plane, &section);
+    cover_inside(in, section, cell);
     return true;
   }
   // The cell only touches the plane: what matters is a facet on it (a cut along an earlier cut
   // or along a tet face).
   std::vector<FacetId> on_plane;
   for (const FacetId f : cells_[cell].facets) {
-    if (facets_[f].stamp != insertion().stamp && facet_on_plane(f, plane)) on_plane.push_back(f);
+    if (facets_[f].stamp != in.stamp && facet_on_plane(f, plane, in.memo)) on_plane.push_back(f);
   }
   bool changed = false;
-  for (const FacetId f : on_plane) changed = cover_inside(f, cell) || changed;
+  for (const FacetId f : on_plane) changed = cover_inside(in, f, cell) || changed;
   return changed;
 }
 
@@ -622,7 +622,7 @@ PreparedTriangle CellComplex::prepare(const CutTriangle& triangle) {
   return t;
 }
 
-bool CellComplex::cell_misses_triangle_box(CellId cell) {
+bool CellComplex::cell_misses_triangle_box(const Insertion& in, CellId cell) {
   Cell& c = cells_[cell];
   if (c.box_min[0] > c.box_max[0]) {
     // Rounded corners are within kCoordinateTolerance of the largest coordinate of each point
@@ -649,54 +649,42 @@ bool CellComplex::cell_misses_triangle_box(CellId cell) {
     }
   }
   for (int k = 0; k < 3; ++k) {
-    if (c.box_max[k] < insertion().box_min[k] || c.box_min[k] > insertion().box_max[k]) return true;
+    if (c.box_max[k] < in.box_min[k] || c.box_min[k] > in.box_max[k]) return true;
   }
   return false;
 }
 
-namespace {
-// The insertion in progress on this thread, or null (see CellComplex::insertion).
-thread_local void* active_insertion = nullptr;
-}  // namespace
-
-CellComplex::Insertion& CellComplex::insertion() { return *static_cast<Insertion*>(active_insertion); }
-
-CellComplex::InsertionScope::InsertionScope(CellComplex& c, Insertion& state, const PreparedTriangle& triangle,
-                                            std::int32_t stamp, std::vector<Index>* touched, bool front_covers_faces)
-    : complex(c) {
-  state = Insertion{};
-  state.stamp = stamp;
-  state.triangle = &triangle;
-  state.touched = touched;
-  state.front_covers_faces = front_covers_faces;
+CellComplex::Insertion CellComplex::begin_insertion(const PreparedTriangle& triangle, std::int32_t stamp, std::vector<Index>* touched,
+                                                     bool front_covers_faces, registry::IntersectionRegistry::SideMemo* memo) const {
+  Insertion in;
+  in.stamp = stamp;
+  in.triangle = &triangle;
+  in.touched = touched;
+  in.front_covers_faces = front_covers_faces;
   if (triangle.corners_are_inputs) {
-    state.has_box = true;
+    in.has_box = true;
     for (int k = 0; k < 3; ++k) {
-      state.box_min[k] = std::min({triangle.corners[0][k], triangle.corners[1][k], triangle.corners[2][k]});
-      state.box_max[k] = std::max({triangle.corners[0][k], triangle.corners[1][k], triangle.corners[2][k]});
+      in.box_min[k] = std::min({triangle.corners[0][k], triangle.corners[1][k], triangle.corners[2][k]});
+      in.box_max[k] = std::max({triangle.corners[0][k], triangle.corners[1][k], triangle.corners[2][k]});
     }
   }
-  active_insertion = &state;
-  complex.registry_->begin_memo({triangle.plane.id, triangle.walls[0].id, triangle.walls[1].id, triangle.walls[2].id});
+  memo->begin(*registry_, {triangle.plane.id, triangle.walls[0].id, triangle.walls[1].id, triangle.walls[2].id});
+  in.memo = memo;
+  return in;
 }
 
-CellComplex::InsertionScope::~InsertionScope() {
-  complex.registry_->end_memo();
-  active_insertion = nullptr;
-}
-
-void CellComplex::insert_into_tet(Index tet, std::int32_t label, std::vector<CellId>* scratch) {
+void CellComplex::insert_into_tet(Insertion& in, Index tet, std::int32_t label, std::vector<CellId>* scratch) {
   if (!refined(tet)) {
-    if (!tet_material(tet) || (label >= 0 && tet_label_[tet] != label) || !tet_may_be_cut(tet)) return;
+    if (!tet_material(tet) || (label >= 0 && tet_label_[tet] != label) || !tet_may_be_cut(in, tet)) return;
     refine(tet);
-    touch(tet);  // its cells are new, even if the triangle then leaves them whole
+    touch(in, tet);  // its cells are new, even if the triangle then leaves them whole
   }
   scratch->clear();
   for (CellId c = first_cell_[tet]; c >= 0; c = cells_[c].next_in_tet) scratch->push_back(c);
   for (const CellId c : *scratch) {
     if (!cells_[c].material || (label >= 0 && cells_[c].label != label)) continue;
-    if (insertion().has_box && cell_misses_triangle_box(c)) continue;
-    process_cell(c);
+    if (in.has_box && cell_misses_triangle_box(in, c)) continue;
+    process_cell(in, c);
   }
 }
 
@@ -704,10 +692,9 @@ void CellComplex::insert_triangle(const PreparedTriangle& triangle, std::span<co
                                   std::vector<Index>* touched) {
   const auto stamp = static_cast<std::int32_t>(inserted_.size());
   inserted_.push_back({triangle.plane, triangle.walls, triangle.cut_id});
-  Insertion state;
-  const InsertionScope scope(*this, state, triangle, stamp, touched, false);
+  Insertion in = begin_insertion(triangle, stamp, touched, false, &side_memos_.local());
   std::vector<CellId> scratch;
-  for (const Index tet : tets) insert_into_tet(tet, label, &scratch);
+  for (const Index tet : tets) insert_into_tet(in, tet, label, &scratch);
 }
 
 void CellComplex::insert_triangles(std::span<const PreparedTriangle> triangles, std::span<const std::vector<Index>> tets,
@@ -771,12 +758,11 @@ void CellComplex::insert_triangles(std::span<const PreparedTriangle> triangles, 
   for (const std::vector<std::size_t>& colour : blocks_of_colour) {
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, colour.size(), 1), [&](const auto& range) {
       std::vector<CellId> scratch;
+      registry::IntersectionRegistry::SideMemo& memo = side_memos_.local();
       for (std::size_t b = range.begin(); b != range.end(); ++b) {
         for (const Pair& pair : blocks[colour[b]]) {
-          Insertion state;
-          const InsertionScope scope(*this, state, triangles[pair.triangle], first_stamp + pair.triangle,
-                                     &block_touched[colour[b]], true);
-          insert_into_tet(pair.tet, -1, &scratch);
+          Insertion in = begin_insertion(triangles[pair.triangle], first_stamp + pair.triangle, &block_touched[colour[b]], true, &memo);
+          insert_into_tet(in, pair.tet, -1, &scratch);
         }
       }
     });

@@ -33,6 +33,7 @@
 #include <vector>
 
 #include <tbb/concurrent_vector.h>
+#include <tbb/enumerable_thread_specific.h>
 
 #include "registry/intersection_registry.hpp"
 
@@ -249,52 +250,73 @@ class CellComplex {
   void append_mesh_edge_chain(Index mesh_edge, Index from, Index to, Index tet, FacetId facet,
                               std::vector<Corner>* corners);
 
+  // One triangle's insertion: what the functions below that take it read and write besides the
+  // complex (the parallel insertion runs several at once, each with its own). Its stamp is the
+  // triangle's index in inserted_.
+  struct Insertion {
+    std::int32_t stamp = -1;
+    const PreparedTriangle* triangle = nullptr;
+    std::vector<Index>* touched = nullptr;
+    bool has_box = false;
+    std::array<double, 3> box_min{}, box_max{};
+    /// A facet on a mesh face is covered only on behalf of its front side when that side holds
+    /// material (insert_triangles); otherwise by whichever side comes first, by the stamps.
+    bool front_covers_faces = false;
+    /// Side tests against the triangle's plane and walls, remembered for this insertion.
+    registry::IntersectionRegistry::SideMemo* memo = nullptr;
+  };
+  /// Starts inserting `triangle` with stamp `stamp`, its side tests remembered in `memo`.
+  Insertion begin_insertion(const PreparedTriangle& triangle, std::int32_t stamp, std::vector<Index>* touched,
+                            bool front_covers_faces, registry::IntersectionRegistry::SideMemo* memo) const;
+
   /// Whether an unrefined tet's closed volume can be changed by the triangle (same tests as
   /// process_cell, on the four corners).
-  bool tet_may_be_cut(Index tet) const;
+  bool tet_may_be_cut(const Insertion& in, Index tet) const;
   /// Side of `plane` at corner k of the triangle being inserted.
-  int corner_side(int k, PlaneId plane) const;
+  int corner_side(const Insertion& in, int k, PlaneId plane) const;
   /// Splits and covers inside one cell; returns whether anything changed.
-  bool process_cell(CellId cell);
-  /// Inserts the current triangle into the cells of one tet labelled `label` (any when -1),
-  /// refining the tet first when the triangle may cut it. `scratch` is reused storage.
-  void insert_into_tet(Index tet, std::int32_t label, std::vector<CellId>* scratch);
+  bool process_cell(Insertion& in, CellId cell);
+  /// Inserts the triangle into the cells of one tet labelled `label` (any when -1), refining the
+  /// tet first when the triangle may cut it. `scratch` is reused storage.
+  void insert_into_tet(Insertion& in, Index tet, std::int32_t label, std::vector<CellId>* scratch);
 
   /// -1, 0 or +1 when every vertex of the cell is <= 0, some are on each side, or all are >= 0
-  /// (2 when all are on the plane, impossible for a cell with volume).
-  int classify(CellId cell, PlaneId plane) const;
+  /// (2 when all are on the plane, impossible for a cell with volume). `memo` may be null.
+  int classify(CellId cell, PlaneId plane, registry::IntersectionRegistry::SideMemo* memo) const;
   /// Whether every corner of the facet lies on the plane.
-  bool facet_on_plane(FacetId facet, PlaneId plane) const;
+  bool facet_on_plane(FacetId facet, PlaneId plane, registry::IntersectionRegistry::SideMemo* memo) const;
   /// classify() for one facet.
-  int classify_facet(FacetId facet, PlaneId plane) const;
+  int classify_facet(FacetId facet, PlaneId plane, registry::IntersectionRegistry::SideMemo* memo) const;
   /// Whether the cell's section by the triangle's plane overlaps the triangle with positive area
   /// (exact separating-axis test in that plane). The cell must cross the plane.
-  bool section_overlaps_triangle(CellId cell) const;
+  bool section_overlaps_triangle(const Insertion& in, CellId cell) const;
   /// Covers the part of facet `f` (on the triangle's plane) inside the triangle, splitting the
   /// facet along the triangle's edges within its plane, on behalf of `cell` (one of its sides).
   /// Returns whether anything changed.
-  bool cover_inside(FacetId f, CellId cell);
+  bool cover_inside(Insertion& in, FacetId f, CellId cell);
 
   /// Splits `cell` by `plane` when the plane passes through its interior. The part on the positive
   /// side keeps the id `cell`; returns the id of the negative part, or -1 when nothing was split.
-  /// The new facet on the plane is returned through `section`.
-  CellId split(CellId cell, PlaneId plane, FacetId* section);
+  /// The new facet on the plane is returned through `section`. Reports the tets it changes as
+  /// touched by the insertion `in`.
+  CellId split(Insertion& in, CellId cell, PlaneId plane, FacetId* section);
   /// Splits facet f, whose corners are all on `plane` or on one side of it except that both sides
   /// occur, into its positive part (kept as f) and its negative part (returned). In a split of
   /// `cell`, the negative part belongs to `negative_cell` on that side; with cell = -1 the facet is
   /// split within its plane and both parts keep both cells.
-  FacetId split_facet(FacetId f, PlaneId plane, CellId cell, CellId negative_cell);
+  FacetId split_facet(Insertion& in, FacetId f, PlaneId plane, CellId cell, CellId negative_cell);
   /// Puts a vertex where `plane` crosses an edge of facet f (strictly), in every facet around it.
-  void mark_crossings(FacetId f, PlaneId plane);
+  void mark_crossings(Insertion& in, FacetId f, PlaneId plane);
   /// Splits a facet by a line in its plane (its intersection with `plane`), after putting the
   /// crossing points on its edges; returns the negative part.
-  FacetId split_facet_in_plane(FacetId f, PlaneId plane);
+  FacetId split_facet_in_plane(Insertion& in, FacetId f, PlaneId plane);
   /// Inserts vertex w, which lies strictly inside edge e, into every facet around e.
-  void insert_on_edge(EdgeId e, VertexId w);
+  void insert_on_edge(Insertion& in, EdgeId e, VertexId w);
   EdgeId add_edge(VertexId a, VertexId b, std::array<PlaneId, 2> line, Index mesh_edge);
-  void cover(FacetId facet);
-  void touch_side(Side s);
-  void touch(Index tet);
+  void cover(Insertion& in, FacetId facet);
+  /// Reports a tet (or the tet on a side) as touched by the insertion, once per insertion.
+  void touch_side(const Insertion& in, Side s);
+  void touch(const Insertion& in, Index tet);
 
   const TetMesh* mesh_;
   registry::IntersectionRegistry* registry_;
@@ -314,32 +336,12 @@ class CellComplex {
   /// triangles, whose corners are inputs): a sound filter before the exact tests, as the cell's box
   /// holds its exact corners. Most cells of a tet crossed by many small triangles (an embedded
   /// scan) are far from each one.
-  bool cell_misses_triangle_box(CellId cell);
+  bool cell_misses_triangle_box(const Insertion& in, CellId cell);
 
-  // The insertion in progress on this thread (several run at once in insert_triangles): reached
-  // through a thread-local pointer, set for the duration of one triangle's insertion. Its stamp is
-  // the triangle's index in inserted_.
-  struct Insertion {
-    std::int32_t stamp = -1;
-    const PreparedTriangle* triangle = nullptr;
-    std::vector<Index>* touched = nullptr;
-    bool has_box = false;
-    std::array<double, 3> box_min{}, box_max{};
-    /// A facet on a mesh face is covered only on behalf of its front side when that side holds
-    /// material (insert_triangles); otherwise by whichever side comes first, by the stamps.
-    bool front_covers_faces = false;
-  };
-  static Insertion& insertion();
-  /// Sets up `state` for inserting `triangle` with stamp `stamp` on this thread; the returned
-  /// guard ends it (and the registry's memo) when it goes out of scope, exceptions included.
-  struct InsertionScope {
-    InsertionScope(CellComplex& complex, Insertion& state, const PreparedTriangle& triangle, std::int32_t stamp,
-                   std::vector<Index>* touched, bool front_covers_faces);
-    ~InsertionScope();
-    InsertionScope(const InsertionScope&) = delete;
-    InsertionScope& operator=(const InsertionScope&) = delete;
-    CellComplex& complex;
-  };
+  // Side-test memos for insertions: one per thread that inserts (the sequential insertion and each
+  // task of the parallel one take their thread's), kept between insertions so that their per-vertex
+  // tables are allocated once.
+  tbb::enumerable_thread_specific<registry::IntersectionRegistry::SideMemo> side_memos_;
   // Every insertion's plane, walls and cut id: facets name the insertion that covered them, and
   // validate() checks they lie inside its triangle.
   struct InsertedTriangle {

@@ -322,51 +322,41 @@ int IntersectionRegistry::side_of_meet(PlaneId a, PlaneId b, PlaneId c, PlaneId 
   return geometry::exact_side(exact_plane(q), geometry::exact_tpi(exact_plane(a), exact_plane(b), exact_plane(c)));
 }
 
-namespace {
-// The memo active on this thread (set by begin_memo, cleared by end_memo), or null.
-thread_local void* active_memo = nullptr;
-}  // namespace
-
-int IntersectionRegistry::side(VertexId v, PlaneId q) const {
-  Memo* memo = static_cast<Memo*>(active_memo);
-  if (memo == nullptr || memo->owner != this) return compute_side(v, q);
+int IntersectionRegistry::side(VertexId v, PlaneId q, SideMemo* memo) const {
+  if (memo == nullptr || memo->owner_ != this) return compute_side(v, q);
   int slot = 0;
-  while (slot < 4 && memo->planes[slot] != q) ++slot;
+  while (slot < 4 && memo->planes_[slot] != q) ++slot;
   if (slot == 4) return compute_side(v, q);
-  if (memo->vertex_stamp.size() <= static_cast<std::size_t>(v)) {
+  if (memo->vertex_stamp_.size() <= static_cast<std::size_t>(v)) {
     // Grow geometrically: vertices are added during an insertion.
-    const std::size_t size = std::max<std::size_t>(vertices_.size(), 2 * memo->vertex_stamp.size());
-    memo->vertex_stamp.resize(size, 0);
-    memo->sides.resize(size);
+    const std::size_t size = std::max<std::size_t>(vertices_.size(), 2 * memo->vertex_stamp_.size());
+    memo->vertex_stamp_.resize(size, 0);
+    memo->sides_.resize(size);
   }
-  if (memo->vertex_stamp[v] != memo->stamp) {
-    memo->vertex_stamp[v] = memo->stamp;
-    memo->sides[v] = {kUnknown, kUnknown, kUnknown, kUnknown};
+  if (memo->vertex_stamp_[v] != memo->stamp_) {
+    memo->vertex_stamp_[v] = memo->stamp_;
+    memo->sides_[v] = {SideMemo::kUnknown, SideMemo::kUnknown, SideMemo::kUnknown, SideMemo::kUnknown};
   }
-  std::int8_t& side = memo->sides[v][slot];
-  if (side == kUnknown) side = static_cast<std::int8_t>(compute_side(v, q));
+  std::int8_t& side = memo->sides_[v][slot];
+  if (side == SideMemo::kUnknown) side = static_cast<std::int8_t>(compute_side(v, q));
   return side;
 }
 
-void IntersectionRegistry::begin_memo(std::initializer_list<PlaneId> planes) {
-  Memo& memo = memos_.local();
-  memo.owner = this;
-  memo.planes = {-1, -1, -1, -1};
+void IntersectionRegistry::SideMemo::begin(const IntersectionRegistry& registry, std::initializer_list<PlaneId> planes) {
+  owner_ = &registry;
+  planes_ = {-1, -1, -1, -1};
   int slot = 0;
   for (const PlaneId p : planes) {
     if (slot == 4) broken("registry", "at most four memoised planes");
-    memo.planes[slot++] = p;
+    planes_[slot++] = p;
   }
-  ++memo.stamp;
-  if (memo.stamp == 0) {
+  ++stamp_;
+  if (stamp_ == 0) {
     // Wrapped after four billion insertions: forget every old stamp.
-    std::fill(memo.vertex_stamp.begin(), memo.vertex_stamp.end(), 0);
-    memo.stamp = 1;
+    std::fill(vertex_stamp_.begin(), vertex_stamp_.end(), 0);
+    stamp_ = 1;
   }
-  active_memo = &memo;
 }
-
-void IntersectionRegistry::end_memo() { active_memo = nullptr; }
 
 Vec3 IntersectionRegistry::compute_position(const Vertex& vertex) const {
   if (vertex.node >= 0) return rest_->row(vertex.node).transpose();

@@ -15,8 +15,8 @@
 //
 // Threads: add_point, add_node and add_plane may run concurrently with each other and with reads
 // (planes and points live in concurrent vectors, whose elements never move), and so may side
-// tests: their exact caches are filled under a lock (the exact path is rare), and each thread has
-// its own memo (begin_memo/end_memo). triangle_plane and wall, which look up equal planes, are
+// tests: their exact caches are filled under a lock (the exact path is rare), and an insertion's
+// memo of side tests (SideMemo) is its own, passed to side(). triangle_plane and wall, which look up equal planes, are
 // sequential. A point's rounded position is computed when it is added, so position() only reads.
 
 #include <tetcut/types.hpp>
@@ -28,7 +28,6 @@
 #include <memory>
 #include <mutex>
 #include <tbb/concurrent_vector.h>
-#include <tbb/enumerable_thread_specific.h>
 #include <unordered_map>
 #include <vector>
 
@@ -73,8 +72,8 @@ class IntersectionRegistry {
   /// Registers mesh node `node`, which lies on the three planes a, b, c.
   VertexId add_node(Index node, PlaneId a, PlaneId b, PlaneId c);
 
-  /// Sign (+1, 0, -1) of plane q at vertex v. Exact. Memoised for the planes given to begin_memo.
-  int side(VertexId v, PlaneId q) const;
+  /// Sign (+1, 0, -1) of plane q at vertex v. Exact.
+  int side(VertexId v, PlaneId q) const { return compute_side(v, q); }
   /// The same for a plane that is not stored in the registry. Exact; not memoised.
   int side(VertexId v, const geometry::Plane& q) const;
   /// Side of q at the point where a, b and c meet, without registering that point (they must meet
@@ -106,14 +105,28 @@ class IntersectionRegistry {
   PlaneId num_planes() const { return static_cast<PlaneId>(planes_.size()); }
   VertexId num_vertices() const { return static_cast<VertexId>(vertices_.size()); }
 
-  /// Memoises this thread's side tests against up to four planes (one cut triangle's plane and
-  /// walls) until end_memo on the same thread: the splits of one insertion ask the same vertex
-  /// many times. Each thread has its own memo, so insertions into disjoint cells may run at once.
-  void begin_memo(std::initializer_list<PlaneId> planes);
-  void end_memo();
+  /// Side tests against up to four planes (one cut triangle's plane and walls), remembered per
+  /// vertex: the splits of one insertion ask the same vertex many times. A memo serves one
+  /// insertion at a time (begin starts the next, forgetting the last); insertions running at once
+  /// each use their own. Memory: two words per registry vertex, grown as vertices are asked about.
+  class SideMemo {
+   public:
+    void begin(const IntersectionRegistry& registry, std::initializer_list<PlaneId> planes);
+
+   private:
+    friend class IntersectionRegistry;
+    static constexpr std::int8_t kUnknown = 2;
+    const IntersectionRegistry* owner_ = nullptr;
+    std::array<PlaneId, 4> planes_{-1, -1, -1, -1};
+    std::uint32_t stamp_ = 0;
+    std::vector<std::uint32_t> vertex_stamp_;            // per vertex: the stamp its sides are of
+    std::vector<std::array<std::int8_t, 4>> sides_;      // per vertex: sign per plane, or kUnknown
+  };
+  /// side(v, q), remembered in `memo` when q is one of the planes it was begun with (a null memo
+  /// remembers nothing).
+  int side(VertexId v, PlaneId q, SideMemo* memo) const;
 
  private:
-  struct Memo;
   int compute_side(VertexId v, PlaneId q) const;
   Vec3 compute_position(const Vertex& vertex) const;
   VertexId push_vertex(Vertex vertex);
@@ -138,19 +151,6 @@ class IntersectionRegistry {
   mutable std::vector<std::unique_ptr<geometry::ExactPoint>> exact_points_;
   std::unordered_map<PointsKey, PlaneId, KeyHash> triangle_planes_;
   std::unordered_map<PointsKey, PlaneId, KeyHash> walls_;
-
-  // Memo of one thread: per vertex, the stamp of the memo's current planes and the four sides
-  // (kUnknown until computed). The active memo of a thread is reached through a thread-local
-  // pointer, set by begin_memo and cleared by end_memo.
-  static constexpr std::int8_t kUnknown = 2;
-  struct Memo {
-    const IntersectionRegistry* owner = nullptr;
-    std::array<PlaneId, 4> planes{-1, -1, -1, -1};
-    std::uint32_t stamp = 0;
-    std::vector<std::uint32_t> vertex_stamp;
-    std::vector<std::array<std::int8_t, 4>> sides;
-  };
-  mutable tbb::enumerable_thread_specific<Memo> memos_;
 };
 
 }  // namespace tetcut::registry
