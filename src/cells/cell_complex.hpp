@@ -209,11 +209,23 @@ class CellComplex {
 
   const TetMesh& mesh() const { return *mesh_; }
   const registry::IntersectionRegistry& registry() const { return *registry_; }
-  /// Concurrent vectors: the parallel insertion appends from several threads, and their elements
-  /// never move.
-  const tbb::concurrent_vector<Cell>& cells() const { return cells_; }
-  const tbb::concurrent_vector<Facet>& facets() const { return facets_; }
-  const tbb::concurrent_vector<Edge>& edges() const { return edges_; }
+  /// Read-only access to records by id, whatever container holds them (concurrent vectors, so
+  /// that the parallel insertion may append from several threads while elements never move).
+  template <typename Record>
+  class Records {
+   public:
+    explicit Records(const tbb::concurrent_vector<Record>& records) : records_(&records) {}
+    std::size_t size() const { return records_->size(); }
+    const Record& operator[](std::size_t id) const { return (*records_)[id]; }
+    auto begin() const { return records_->begin(); }
+    auto end() const { return records_->end(); }
+
+   private:
+    const tbb::concurrent_vector<Record>* records_;
+  };
+  Records<Cell> cells() const { return Records<Cell>(cells_); }
+  Records<Facet> facets() const { return Records<Facet>(facets_); }
+  Records<Edge> edges() const { return Records<Edge>(edges_); }
 
   /// The tet on side `s` of a facet, or -1 for the outside.
   Index tet_of(Side s) const;
