@@ -45,8 +45,8 @@ json_check sticks/summary.json 'j["pieces"] == 4 and j["max_intersecting_pairs"]
 
 # A flap cut into a slab, folded back onto the tissue by three hooks (issue 16's folded flap):
 # it must come to lie on the slab's top (its box reaches above the slab) without passing into it.
-# Crossing pairs are checked from 0.15 s on: before that the flap sags onto its own cut faces,
-# where the sides pressed at the junction of its floor and walls still count (see the README).
+# Crossing pairs are checked from 0.15 s on: before the hooks lift it, the flap's weight presses
+# the two sides of its floor cut into each other deeper than the guards allow (see the README).
 expect_exit 0 "$TETCUT" sim "$EXAMPLES/folded-flap.json" -o flap --check-intersections
 json_check flap/summary.json 'j["pieces"] == 1 and j["final_box"][5] > 0.55 and j["unconverged_steps"] <= 3'
 json_check flap/summary.json 'len(j["intersecting_pairs"]) == 31 and max(j["intersecting_pairs"][3:]) == 0'
