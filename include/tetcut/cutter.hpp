@@ -24,11 +24,6 @@
 
 namespace tetcut {
 
-struct EmbedOptions;
-struct EmbedReport;
-class Cutter;
-Cutter embed(TetMesh mesh, const TriangleSurface& surface, const EmbedOptions& options, EmbedReport* report);
-
 /// The simulation mesh after cutting. Each material component of an input tet has its own copy
 /// of the tet, with the tet's rest positions, so no element is smaller or worse shaped than an
 /// input element. Copies whose shared face holds common material share that face's nodes.
@@ -172,7 +167,9 @@ class Cutter {
   std::int64_t num_cut_triangles() const;
 
  private:
-  friend Cutter embed(TetMesh mesh, const TriangleSurface& surface, const EmbedOptions& options, EmbedReport* report);
+  // The library's later stages (the embedding) reach the state through CutterAccess, an internal
+  // class (src/cutter/cutter_state.hpp), so that this header names none of them.
+  friend struct CutterAccess;
   struct State;
   std::unique_ptr<State> state_;
 };

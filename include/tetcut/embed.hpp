@@ -14,34 +14,13 @@
 
 #include <tetcut/cutter.hpp>
 #include <tetcut/generators.hpp>
+#include <tetcut/quality.hpp>  // check_surface, which embed() runs first
 
 #include <optional>
 #include <string>
 #include <string_view>
 
 namespace tetcut {
-
-/// What combinatorics says about a triangle surface, after welding vertices with identical
-/// coordinates. A surface is balanced (SurfaceStats' word too) when every edge is used as often in
-/// one direction as in the other: closed and consistently oriented, so that its winding number is
-/// defined everywhere off the surface, even where the surface touches or passes through itself.
-struct SurfaceCheck {
-  Index vertices = 0;              ///< distinct vertices after welding
-  Index triangles = 0;
-  Index degenerate_triangles = 0;  ///< zero area (collinear or repeated corners): skipped by the cut
-  /// Edges used more often in one direction than the other: boundary edges (used once) and edges
-  /// where neighbouring triangles disagree on orientation.
-  Index unbalanced_edges = 0;
-  Index misoriented_edges = 0;     ///< of those, edges used at least twice, all the same way
-  Index nonmanifold_edges = 0;     ///< edges of more than two triangles (allowed when balanced)
-  Index components = 0;            ///< connected through shared edges
-
-  bool balanced() const { return unbalanced_edges == 0; }
-};
-
-/// Checks a surface. Throws Error(kInvalidInput) naming the triangle when a corner is not finite
-/// or missing. O(F log F).
-SurfaceCheck check_surface(const TriangleSurface& surface);
 
 /// Which material an embedding keeps.
 enum class KeepMaterial {

@@ -1,6 +1,8 @@
 #pragma once
 // Size and shape measures of a tet mesh: what `tetcut info` reports, and what sets the stable
-// time step of an explicit simulation (the smallest altitude).
+// time step of an explicit simulation (the smallest altitude). Measures and checks of triangle
+// surfaces, in one vocabulary: a surface is `balanced` when every edge is used as often in one
+// direction as in the other, `two_manifold` when every edge has two triangles.
 
 #include <tetcut/surface.hpp>
 #include <tetcut/tet_mesh.hpp>
@@ -21,8 +23,8 @@ struct MeshQuality {
 /// Measures `mesh` in rest positions, or in current positions when `current` is true. O(V + T).
 MeshQuality measure_quality(const TetMesh& mesh, bool current = false);
 
-/// Measures of a triangle surface, its vertices taken as given (no welding; check_surface in
-/// embed.hpp welds). Two properties of its edges, distinct: `balanced` (the one cutting and
+/// Measures of a triangle surface, its vertices taken as given (no welding; check_surface
+/// welds). Two properties of its edges, distinct: `balanced` (the one cutting and
 /// embedding need: the winding number is defined) and `two_manifold`; the CLI's reports use the
 /// same names.
 struct SurfaceStats {
@@ -47,5 +49,28 @@ struct SurfaceStats {
 };
 
 SurfaceStats measure_surface(const TriangleSurface& surface);
+
+/// What combinatorics says about a triangle surface, after welding vertices with identical
+/// coordinates: what embed() checks first. A surface is balanced (as in SurfaceStats) when every
+/// edge is used as often in one direction as in the other: closed and consistently oriented, so
+/// that its winding number is defined everywhere off the surface, even where the surface touches
+/// or passes through itself.
+struct SurfaceCheck {
+  Index vertices = 0;              ///< distinct vertices after welding
+  Index triangles = 0;
+  Index degenerate_triangles = 0;  ///< zero area (collinear or repeated corners): skipped by the cut
+  /// Edges used more often in one direction than the other: boundary edges (used once) and edges
+  /// where neighbouring triangles disagree on orientation.
+  Index unbalanced_edges = 0;
+  Index misoriented_edges = 0;     ///< of those, edges used at least twice, all the same way
+  Index nonmanifold_edges = 0;     ///< edges of more than two triangles (allowed when balanced)
+  Index components = 0;            ///< connected through shared edges
+
+  bool balanced() const { return unbalanced_edges == 0; }
+};
+
+/// Checks a surface. Throws Error(kInvalidInput) naming the triangle when a corner is not finite
+/// or missing. O(F log F).
+SurfaceCheck check_surface(const TriangleSurface& surface);
 
 }  // namespace tetcut

@@ -72,9 +72,17 @@ class TetMesh {
 
 struct TriangleSurface;
 
+/// Where a triangle of boundary_surface comes from: the tet it bounds and which face of it (local
+/// face `local_face`, see kTetFaces).
+struct BoundaryFace {
+  Index tet = -1;
+  int local_face = -1;
+};
+
 /// The faces incident on exactly one tet, oriented outward, over the mesh's node ids (rest
-/// positions); unused nodes are dropped and the vertex ids renumbered. O(T).
-TriangleSurface boundary_surface(const TetMesh& mesh);
+/// positions); unused nodes are dropped and the vertex ids renumbered. With `faces`, also where
+/// each triangle comes from (one entry per triangle, in order). O(T).
+TriangleSurface boundary_surface(const TetMesh& mesh, std::vector<BoundaryFace>* faces = nullptr);
 
 /// Builds faces and edges of `tets` (ids below `num_nodes`).
 TetAdjacency build_adjacency(const Tets& tets, Index num_nodes);

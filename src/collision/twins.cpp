@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <unordered_map>
 
+#include "util/hash.hpp"
 #include "util/union_find.hpp"
 
 namespace tetcut::collision {
@@ -14,20 +15,13 @@ namespace tetcut::collision {
 std::vector<Index> twin_ids(const Points& rest, const Points& now, double rest_tolerance, double tolerance) {
   const double cell = 4 * rest_tolerance;
   using Key = std::array<std::int64_t, 3>;
-  struct Hash {
-    std::size_t operator()(const Key& k) const {
-      std::uint64_t h = 0x9e3779b97f4a7c15ULL;
-      for (const std::int64_t c : k) h = (h ^ static_cast<std::uint64_t>(c)) * 0xbf58476d1ce4e5b9ULL;
-      return static_cast<std::size_t>(h ^ (h >> 31));
-    }
-  };
   const auto key_of = [&](Index v) {
     Key k;
     for (int i = 0; i < 3; ++i) k[static_cast<std::size_t>(i)] = static_cast<std::int64_t>(std::floor(rest(v, i) / cell));
     return k;
   };
   // Vertices by cell: a chain through each cell's vertices.
-  std::unordered_map<Key, Index, Hash> first;
+  std::unordered_map<Key, Index, WordsHash> first;
   first.reserve(static_cast<std::size_t>(rest.rows()));
   std::vector<Index> next(static_cast<std::size_t>(rest.rows()), -1);
   UnionFind same(static_cast<std::size_t>(rest.rows()));

@@ -1,5 +1,6 @@
 #pragma once
-// The state behind a Cutter, shared by the cutter and the embedding (internal).
+// The state behind a Cutter, shared by the cutter and, through CutterAccess, the embedding
+// (internal).
 
 #include <tetcut/cutter.hpp>
 #include <tetcut/error.hpp>
@@ -101,6 +102,14 @@ struct Cutter::State {
   std::vector<Index> copies_since_set;         // copies made since set_current
   surface::SurfacePatches surface;             // the material surface, rebuilt where batches changed it
   std::int64_t next_cut_id = 0;
+};
+
+// The way into a Cutter's state for the stages built on the cutter: the embedding cuts the mesh,
+// decides which material to keep, and builds the copies over it, all on the state. Cutter's one
+// friend; not part of the API, since the state is not.
+struct CutterAccess {
+  using State = Cutter::State;
+  static State& state(Cutter& cutter) { return *cutter.state_; }
 };
 
 }  // namespace tetcut

@@ -79,7 +79,7 @@ Cutter embed(TetMesh mesh, const TriangleSurface& surface, const EmbedOptions& o
 
   start = Clock::now();
   Cutter cutter(std::move(mesh));
-  Cutter::State& s = *cutter.state_;
+  CutterAccess::State& s = CutterAccess::state(cutter);
   CutBatchReport batch;
   std::vector<Index> touched;
   s.insert_rest(surface, &batch, &touched);

@@ -7,8 +7,6 @@
 #include <numbers>
 #include <vector>
 
-#include "geometry/predicates.hpp"
-
 namespace tetcut {
 
 MeshQuality measure_quality(const TetMesh& mesh, bool current) {
@@ -63,43 +61,6 @@ MeshQuality measure_quality(const TetMesh& mesh, bool current) {
   q.max_dihedral_degrees = std::acos(max_cos) * to_degrees;
   q.num_unused_nodes = static_cast<Index>(std::count(used.begin(), used.end(), 0));
   return q;
-}
-
-SurfaceStats measure_surface(const TriangleSurface& surface) {
-  SurfaceStats s;
-  const Points& v = surface.vertices;
-  if (v.rows() > 0) {
-    s.bbox_min = v.colwise().minCoeff().transpose();
-    s.bbox_max = v.colwise().maxCoeff().transpose();
-  }
-  // Each edge use as (lower id, higher id, +1 when run from lower to higher, else -1).
-  std::vector<std::array<Index, 3>> edges;
-  edges.reserve(static_cast<std::size_t>(surface.num_triangles()) * 3);
-  for (Index f = 0; f < surface.num_triangles(); ++f) {
-    const Vec3 a = v.row(surface.triangles(f, 0)), b = v.row(surface.triangles(f, 1)), c = v.row(surface.triangles(f, 2));
-    const Vec3 n = (b - a).cross(c - a);
-    s.area += 0.5 * n.norm();
-    s.enclosed_volume += a.dot(b.cross(c)) / 6.0;
-    if (geometry::collinear(a, b, c)) ++s.num_degenerate_triangles;
-    for (int k = 0; k < 3; ++k) {
-      const Index i = surface.triangles(f, k), j = surface.triangles(f, (k + 1) % 3);
-      edges.push_back(i < j ? std::array<Index, 3>{i, j, 1} : std::array<Index, 3>{j, i, -1});
-    }
-  }
-  std::sort(edges.begin(), edges.end());
-  for (std::size_t i = 0; i < edges.size();) {
-    std::size_t j = i;
-    Index balance = 0;
-    while (j < edges.size() && edges[j][0] == edges[i][0] && edges[j][1] == edges[i][1]) balance += edges[j++][2];
-    const std::size_t count = j - i;
-    if (count == 1) ++s.num_boundary_edges;
-    if (count > 2) ++s.num_nonmanifold_edges;
-    if (balance != 0) ++s.num_unbalanced_edges;
-    i = j;
-  }
-  s.two_manifold = surface.num_triangles() > 0 && s.num_boundary_edges == 0 && s.num_nonmanifold_edges == 0;
-  s.balanced = surface.num_triangles() > 0 && s.num_unbalanced_edges == 0;
-  return s;
 }
 
 }  // namespace tetcut

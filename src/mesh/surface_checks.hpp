@@ -1,5 +1,7 @@
 #pragma once
-// Checks of triangle surfaces handed to the library (cut batches, surfaces to embed).
+// Checks of triangle surfaces handed to the library (cut batches, surfaces to embed). The public
+// measures and checks of a surface, measure_surface and check_surface (tetcut/quality.hpp), are
+// defined beside these, in surface_checks.cpp.
 
 #include <tetcut/surface.hpp>
 

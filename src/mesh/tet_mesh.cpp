@@ -190,14 +190,16 @@ TetMesh::TetMesh(Points rest, Tets tets, const std::string& source, std::span<co
   adjacency_ = build_adjacency(tets_, num_nodes);
 }
 
-TriangleSurface boundary_surface(const TetMesh& mesh) {
+TriangleSurface boundary_surface(const TetMesh& mesh, std::vector<BoundaryFace>* faces) {
   const TetAdjacency& adj = mesh.adjacency();
+  if (faces != nullptr) faces->clear();
   std::vector<Index> new_id(static_cast<std::size_t>(mesh.num_nodes()), -1);
   std::vector<Index> corners;
   Index num_vertices = 0;
   for (Index t = 0; t < mesh.num_tets(); ++t) {
     for (int f = 0; f < 4; ++f) {
       if (adj.tets_of_face(adj.tet_faces(t, f)).size() != 1) continue;
+      if (faces != nullptr) faces->push_back({t, f});
       for (const int local : kTetFaces[f]) {
         Index& id = new_id[mesh.tets()(t, local)];
         if (id < 0) id = num_vertices++;

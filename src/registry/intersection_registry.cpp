@@ -3,7 +3,6 @@
 #include "util/broken.hpp"
 
 #include <algorithm>
-#include <bit>
 
 namespace tetcut::registry {
 
@@ -23,16 +22,17 @@ bool lexicographically_less(const Vec3& a, const Vec3& b) {
 
 }  // namespace
 
-std::size_t IntersectionRegistry::KeyHash::operator()(const PointsKey& key) const {
-  // 64-bit mix of the bit patterns (splitmix64 finaliser per word).
-  std::uint64_t h = 0x9e3779b97f4a7c15ULL;
-  for (const double x : key.coordinates) {
-    std::uint64_t z = std::bit_cast<std::uint64_t>(x) + 0x9e3779b97f4a7c15ULL + (h << 6) + (h >> 2);
-    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
-    z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
-    h ^= z ^ (z >> 31);
+WallKey wall_key(const Vec3& p, const Vec3& q, int axis, bool* swapped) {
+  *swapped = lexicographically_less(q, p);
+  const Vec3& from = *swapped ? q : p;
+  const Vec3& to = *swapped ? p : q;
+  WallKey key;
+  for (int k = 0; k < 3; ++k) {
+    key[k] = canonical_zero(from[k]);
+    key[3 + k] = canonical_zero(to[k]);
   }
-  return static_cast<std::size_t>(h);
+  key[6] = axis;
+  return key;
 }
 
 PlaneId IntersectionRegistry::add_plane(const Plane& plane) {
@@ -57,9 +57,9 @@ OrientedPlane IntersectionRegistry::triangle_plane(const Vec3& a, const Vec3& b,
       }
     }
   }
-  PointsKey key{};
+  std::array<double, 9> key;
   for (int i = 0; i < 3; ++i) {
-    for (int k = 0; k < 3; ++k) key.coordinates[3 * i + k] = sorted[i][k];
+    for (int k = 0; k < 3; ++k) key[3 * i + k] = sorted[i][k];
   }
   const auto [it, inserted] = triangle_planes_.try_emplace(key, num_planes());
   if (inserted) add_plane(Plane::through(sorted[0], sorted[1], sorted[2]));
@@ -67,16 +67,11 @@ OrientedPlane IntersectionRegistry::triangle_plane(const Vec3& a, const Vec3& b,
 }
 
 OrientedPlane IntersectionRegistry::wall(const Vec3& p, const Vec3& q, int axis, const Vec3& inner) {
-  Vec3 from = p.unaryExpr(&canonical_zero), to = q.unaryExpr(&canonical_zero);
-  if (lexicographically_less(to, from)) std::swap(from, to);
-  PointsKey key{};
-  for (int k = 0; k < 3; ++k) {
-    key.coordinates[k] = from[k];
-    key.coordinates[3 + k] = to[k];
-  }
-  key.coordinates[6] = axis;
+  bool swapped = false;
+  const WallKey key = wall_key(p, q, axis, &swapped);
   const auto [it, inserted] = walls_.try_emplace(key, num_planes());
-  if (inserted) add_plane(Plane::wall(from, to, axis));
+  // The wall through the key's ends, zeros folded: the same plane however the edge was given.
+  if (inserted) add_plane(Plane::wall(Vec3(key[0], key[1], key[2]), Vec3(key[3], key[4], key[5]), axis));
   const int side = geometry::side_of_point(planes_[it->second], inner);
   if (side == 0) broken("registry", "the inner point of a wall lies on it");
   return {it->second, side};

@@ -32,11 +32,21 @@
 #include <vector>
 
 #include "geometry/plane.hpp"
+#include "util/hash.hpp"
 
 namespace tetcut::registry {
 
 using PlaneId = std::int32_t;
 using VertexId = std::int32_t;
+
+/// What names the wall through edge (p, q) along an axis, so that it is stored once: the edge's
+/// ends in lexicographic order, whichever way the edge is given, as the bits of their coordinates
+/// (-0.0 folded into 0.0), and the axis. The registry keys its walls by it, and PlaneBook its
+/// world-space walls, which are not the registry's planes.
+using WallKey = std::array<double, 7>;
+/// The key of the wall through (p, q) along `axis`; `*swapped` tells whether the ends are in the
+/// order (q, p) in it.
+WallKey wall_key(const Vec3& p, const Vec3& q, int axis, bool* swapped);
 
 /// A stored plane and how a requested orientation relates to it: sign +1 when the stored plane's
 /// normal points the requested way, -1 when opposite.
@@ -135,22 +145,14 @@ class IntersectionRegistry {
   const geometry::ExactPlane& exact_plane(PlaneId p) const;
   const geometry::ExactPoint& exact_point(VertexId v) const;
 
-  struct PointsKey {
-    std::array<double, 9> coordinates;
-    bool operator==(const PointsKey&) const = default;
-  };
-  struct KeyHash {
-    std::size_t operator()(const PointsKey& key) const;
-  };
-
   const Points* rest_;
   tbb::concurrent_vector<geometry::Plane> planes_;
   tbb::concurrent_vector<Vertex> vertices_;
   mutable std::mutex exact_mutex_;  // guards the two caches below
   mutable std::vector<std::unique_ptr<geometry::ExactPlane>> exact_planes_;
   mutable std::vector<std::unique_ptr<geometry::ExactPoint>> exact_points_;
-  std::unordered_map<PointsKey, PlaneId, KeyHash> triangle_planes_;
-  std::unordered_map<PointsKey, PlaneId, KeyHash> walls_;
+  std::unordered_map<std::array<double, 9>, PlaneId, WordsHash> triangle_planes_;  // by sorted corners
+  std::unordered_map<WallKey, PlaneId, WordsHash> walls_;
 };
 
 }  // namespace tetcut::registry

@@ -4,7 +4,6 @@
 
 #include <tetcut/types.hpp>
 
-#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdint>
@@ -24,6 +23,9 @@ namespace tetcut::registry {
 // that what one triangle leaves on the plane the next recognises by plane id instead of by exact
 // arithmetic. Each plane gets a key unique over all batches (from the cut id of the first triangle
 // on it), which names it to the registry's symbolic test of where two copies' pull-backs agree.
+// Unlike the registry, which stores a triangle's plane once per set of corners, the book finds one
+// plane through different corners (the next triangle of a strip), and it holds world-space planes,
+// which the registry never sees; walls it keys as the registry does (wall_key).
 class PlaneBook {
  public:
   struct Found {
@@ -48,18 +50,12 @@ class PlaneBook {
   }
 
   // The wall through edge (p, q) along `axis`, oriented towards `inner`; one per edge and axis.
+  // Keyed as the registry keys its walls (registry::wall_key).
   Found wall(const Vec3& p, const Vec3& q, int axis, const Vec3& inner, std::int64_t fresh_key) {
-    std::array<double, 7> key;
-    const bool swap = std::lexicographical_compare(q.data(), q.data() + 3, p.data(), p.data() + 3);
-    const Vec3& a = swap ? q : p;
-    const Vec3& b = swap ? p : q;
-    for (int k = 0; k < 3; ++k) {
-      key[k] = a[k] + 0.0;  // + 0.0 folds -0.0 into 0.0
-      key[3 + k] = b[k] + 0.0;
-    }
-    key[6] = axis;
+    bool swap = false;
+    const WallKey key = wall_key(p, q, axis, &swap);
     auto it = walls_.find(key);
-    if (it == walls_.end()) it = walls_.emplace(key, Entry{geometry::Plane::wall(a, b, axis), fresh_key}).first;
+    if (it == walls_.end()) it = walls_.emplace(key, Entry{geometry::Plane::wall(swap ? q : p, swap ? p : q, axis), fresh_key}).first;
     return {it->second.key, geometry::side_of_point(it->second.plane, inner), &it->second.plane};
   }
 
@@ -100,16 +96,9 @@ class PlaneBook {
     geometry::Plane plane;
     std::int64_t key;
   };
-  struct CellHash {
-    std::size_t operator()(const std::array<std::int64_t, 4>& c) const {
-      std::uint64_t h = 0x9e3779b97f4a7c15ULL;
-      for (const std::int64_t x : c) h = (h ^ static_cast<std::uint64_t>(x)) * 0xbf58476d1ce4e5b9ULL;
-      return static_cast<std::size_t>(h ^ (h >> 31));
-    }
-  };
   std::deque<Entry> entries_;  // a deque keeps the planes in place for the pointers handed out
-  std::unordered_map<std::array<std::int64_t, 4>, std::vector<std::size_t>, CellHash> planes_;
-  std::map<std::array<double, 7>, Entry> walls_;
+  std::unordered_map<std::array<std::int64_t, 4>, std::vector<std::size_t>, WordsHash> planes_;
+  std::unordered_map<WallKey, Entry, WordsHash> walls_;  // nodes stay put: pointers to their planes are handed out
   std::map<std::pair<std::int64_t, Index>, PlaneId> per_copy_;
 };
 

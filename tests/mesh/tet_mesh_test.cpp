@@ -56,6 +56,28 @@ TEST(TetMesh, BoundarySurfaceIsClosedAndOutward) {
   EXPECT_GT(s.enclosed_volume, 0);
 }
 
+TEST(TetMesh, BoundarySurfaceSaysWhichTetFaceEachTriangleIs) {
+  const TetMesh mesh = two_tets();
+  std::vector<BoundaryFace> faces;
+  const TriangleSurface surface = boundary_surface(mesh, &faces);
+  ASSERT_EQ(faces.size(), static_cast<std::size_t>(surface.num_triangles()));
+  std::vector<Index> new_id(static_cast<std::size_t>(mesh.num_nodes()), -1);
+  for (Index t = 0; t < surface.num_triangles(); ++t) {
+    const BoundaryFace& from = faces[t];
+    // The named face is on the boundary, and the triangle is that face's corners in its order.
+    EXPECT_EQ(mesh.adjacency().tets_of_face(mesh.adjacency().tet_faces(from.tet, from.local_face)).size(), 1u);
+    for (int k = 0; k < 3; ++k) {
+      const Index node = mesh.tets()(from.tet, kTetFaces[from.local_face][k]);
+      EXPECT_EQ(surface.vertices.row(surface.triangles(t, k)), mesh.rest().row(node));
+      Index& id = new_id[node];
+      if (id < 0) id = surface.triangles(t, k);
+      EXPECT_EQ(surface.triangles(t, k), id);  // one surface vertex per node
+    }
+  }
+  // Both tets have three boundary faces; the face they share (local face 0 of each) is not one.
+  for (const BoundaryFace& from : faces) EXPECT_NE(from.local_face, 0);
+}
+
 TEST(TetMesh, RejectsInvertedTetNamingElementAndLine) {
   Points p(4, 3);
   p << 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1;
