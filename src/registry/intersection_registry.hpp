@@ -16,8 +16,9 @@
 // Threads: add_point, add_node and add_plane may run concurrently with each other and with reads
 // (planes and points live in concurrent vectors, whose elements never move), and so may side
 // tests: their exact caches are filled under a lock (the exact path is rare), and an insertion's
-// memo of side tests (SideMemo) is its own, passed to side(). triangle_plane and wall, which look up equal planes, are
-// sequential. A point's rounded position is computed when it is added, so position() only reads.
+// memo of side tests (SideMemo) is its own, passed to side(). triangle_plane and wall, which look
+// up equal planes, are sequential. A point's rounded position is computed when it is added, so
+// position() only reads.
 
 #include <tetcut/types.hpp>
 
