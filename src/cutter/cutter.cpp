@@ -1,8 +1,24 @@
-// The Cutter: the public face of the pipeline. A batch goes triangle by triangle into the cell
-// complex (split and cover, exactly): in rest space through the box tree of the input tets; in
-// world space through a box tree of the copies' current shapes, pulled back per copy. After the
-// batch, the touched tets' components are recomputed and the copies and nodes updated in place.
-// A result is then the pieces, the simulation mesh and the material surface.
+// The Cutter: the paper's pipeline, batch by batch. Reading Cutter::cut (rest space),
+// Cutter::cut_deformed (world space) and State::finish_batch below is reading the algorithm;
+// docs/algorithm.md maps each stage to its folder.
+//
+//  1. Planes and points (Appendix A; registry/): each triangle's plane and the walls through its
+//     edges (the paper's virtual triangles), stored once; every point is three of them.
+//     In: the batch's corners. Out: a PreparedTriangle per triangle.
+//  2. The tets a triangle may touch (Appendix A; spatial/): a box tree of the input tets in rest
+//     space; in world space, of the copies' current shapes, each copy pulling the triangle back
+//     into its rest space. In: the triangle's box. Out: candidate tets (copies).
+//  3. Resolve into polygons (3.1, 3.2; cells/): each candidate tet refined into cells when first
+//     cut, its cells split by the triangle's plane and the part inside its walls covered, exactly.
+//     In: prepared triangles and candidates. Out: the tets whose cells changed (touched).
+//  4. Material components (3.3; components/): the cells of each touched tet connected through
+//     uncovered facets. In: the complex. Out: each cell's component.
+//  5. Copies, joins and nodes (3.3, 3.4; connectivity/): a copy of the tet per component, copies
+//     sharing face polygons with material joined, nodes collapsed; ids once given stay.
+//     In: the components. Out: new and changed copies and nodes (the batch's report).
+//  6. The material surface (4; surface/): the patches of the touched tets and their neighbours
+//     marked, rebuilt when the surface is next asked for. In: the complex and the copies.
+//  A result (result()) adds the pieces (connectivity/) and the simulation mesh.
 
 #include <tetcut/cutter.hpp>
 #include <tetcut/error.hpp>
@@ -60,6 +76,7 @@ std::span<const Index> Cutter::copies_of(Index tet) const {
 void Cutter::State::insert_rest(const TriangleSurface& batch, CutBatchReport* report, std::vector<Index>* touched) {
   check_batch(batch);
   report->triangles = batch.num_triangles();
+  // 1. Each triangle's plane and walls.
   std::vector<cells::PreparedTriangle> prepared;
   for (Index i = 0; i < batch.num_triangles(); ++i) {
     const std::array<Vec3, 3> x = triangle_corners(batch, i);
@@ -81,9 +98,10 @@ void Cutter::State::insert_rest(const TriangleSurface& batch, CutBatchReport* re
     }
     prepared.push_back(t);
   }
-  // Large batches (an embedded surface) go to the block-scheduled insertion, on one thread too
-  // (it takes each tet's triangles while the tet's cells are in cache: a third faster than one
-  // triangle at a time); a progressive cut's few triangles would not repay sorting them by block.
+  // 2 and 3. The tets each may touch, and the insertion. Large batches (an embedded surface) go
+  // to the block-scheduled insertion, on one thread too (it takes each tet's triangles while the
+  // tet's cells are in cache: a third faster than one triangle at a time); a progressive cut's
+  // few triangles would not repay sorting them by block.
   constexpr std::size_t kParallelFrom = 256;
   if (prepared.size() < kParallelFrom) {
     std::vector<Index> candidates;
@@ -115,9 +133,34 @@ CutBatchReport Cutter::cut(const TriangleSurface& batch) {
   State& s = *state_;
   CutBatchReport report;
   std::vector<Index> touched;
-  s.insert_rest(batch, &report, &touched);
-  s.finish_batch(std::move(touched), &report);
+  s.insert_rest(batch, &report, &touched);      // stages 1-3
+  s.finish_batch(std::move(touched), &report);  // stages 4-6
   return report;
+}
+
+void Cutter::State::finish_batch(std::vector<Index> touched, CutBatchReport* report) {
+  std::sort(touched.begin(), touched.end());
+  touched.erase(std::unique(touched.begin(), touched.end()), touched.end());
+  // 4. Material components of the touched tets.
+  components::update_components(complex, touched, &components);
+  // 5. Their copies, joins and nodes, updated in place.
+  connectivity::TetCopies::Update update = copies.update(complex, components, touched);
+  // 6. The surface patches that can change: those of the touched tets and their neighbours (cells,
+  //    facets on shared faces, points on shared edges), and of copies whose nodes changed.
+  surface.mark_around(touched);
+  std::vector<Index> renumbered;
+  for (const Index copy : update.changed_copies) renumbered.push_back(copies.copy_tet()[copy]);
+  surface.mark(renumbered);
+  // New nodes start where the nodes they were split from are.
+  for (const Index source : update.new_node_source) current.push_back(current[source]);
+  for (Index c = update.first_new_copy; c < copies.num_copies(); ++c) copies_since_set.push_back(c);
+  report->tets_touched = static_cast<Index>(touched.size());
+  report->touched = std::move(touched);
+  report->first_new_node = update.first_new_node;
+  report->new_node_source = std::move(update.new_node_source);
+  report->first_new_tet = update.first_new_copy;
+  report->new_tet_source = std::move(update.new_copy_source);
+  report->changed_tets = std::move(update.changed_copies);
 }
 
 void Cutter::set_current(const Points& nodes) {
@@ -226,7 +269,7 @@ CutBatchReport Cutter::cut_deformed(const TriangleSurface& batch) {
       report.degenerate.push_back(i);
       continue;
     }
-    // The triangle in world space: its plane, and walls oriented towards the opposite corner
+    // 1. The triangle in world space: its plane, and walls oriented towards the opposite corner
     // (shared with earlier triangles of the batch on the same plane or edge).
     const PlaneBook::Found plane = s.planes.triangle_plane(geometry::Plane::through(corners[0], corners[1], corners[2]), 4 * std::int64_t{id});
     const geometry::Plane world = plane.sign > 0 ? *plane.plane : plane.plane->flipped();
@@ -239,6 +282,7 @@ CutBatchReport Cutter::cut_deformed(const TriangleSurface& batch) {
       world_walls[e] = walls[e].sign > 0 ? *walls[e].plane : walls[e].plane->flipped();
       walls_with_signs[e] = {&world_walls[e], 1};
     }
+    // 2. The copies it may touch in their current shapes.
     candidates.clear();
     s.query_current(box_of(corners), &candidates);
     for (const Index copy : candidates) {
@@ -273,6 +317,7 @@ CutBatchReport Cutter::cut_deformed(const TriangleSurface& batch) {
       };
       t.plane = pulled(plane);
       for (int e = 0; e < 3; ++e) t.walls[e] = pulled(walls[e]);
+      // 3. Into this copy's cells only (those labelled with it).
       const Index tet = s.copies.copy_tet()[copy];
       s.complex.insert_triangle(t, std::span<const Index>(&tet, 1), static_cast<std::int32_t>(copy), &touched);
     }
@@ -280,7 +325,7 @@ CutBatchReport Cutter::cut_deformed(const TriangleSurface& batch) {
   std::sort(report.skipped_inverted.begin(), report.skipped_inverted.end());
   report.skipped_inverted.erase(std::unique(report.skipped_inverted.begin(), report.skipped_inverted.end()),
                                 report.skipped_inverted.end());
-  s.finish_batch(std::move(touched), &report);
+  s.finish_batch(std::move(touched), &report);  // stages 4-6
   return report;
 }
 

@@ -57,29 +57,10 @@ struct Cutter::State {
     }
   }
 
-  // Recomputes the touched tets' components and updates copies and nodes; fills the report.
-  void finish_batch(std::vector<Index> touched, CutBatchReport* report) {
-    std::sort(touched.begin(), touched.end());
-    touched.erase(std::unique(touched.begin(), touched.end()), touched.end());
-    components::update_components(complex, touched, &components);
-    connectivity::TetCopies::Update update = copies.update(complex, components, touched);
-    // The surface patches that can change: those of the touched tets and their neighbours (cells,
-    // facets on shared faces, points on shared edges), and of copies whose nodes changed.
-    surface.mark_around(touched);
-    std::vector<Index> renumbered;
-    for (const Index copy : update.changed_copies) renumbered.push_back(copies.copy_tet()[copy]);
-    surface.mark(renumbered);
-    // New nodes start where the nodes they were split from are.
-    for (const Index source : update.new_node_source) current.push_back(current[source]);
-    for (Index c = update.first_new_copy; c < copies.num_copies(); ++c) copies_since_set.push_back(c);
-    report->tets_touched = static_cast<Index>(touched.size());
-    report->touched = std::move(touched);
-    report->first_new_node = update.first_new_node;
-    report->new_node_source = std::move(update.new_node_source);
-    report->first_new_tet = update.first_new_copy;
-    report->new_tet_source = std::move(update.new_copy_source);
-    report->changed_tets = std::move(update.changed_copies);
-  }
+  // After the insertion of a batch, the stages that follow it for the tets it touched (see
+  // cutter.cpp, "The pipeline"): components, copies and nodes, the surface patches to rebuild.
+  // Fills the report.
+  void finish_batch(std::vector<Index> touched, CutBatchReport* report);
 
   std::int32_t next_id(Index batch_size) {
     if (next_cut_id + batch_size > std::numeric_limits<std::int32_t>::max()) {
