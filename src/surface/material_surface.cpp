@@ -6,6 +6,8 @@
 #include <algorithm>
 #include <limits>
 
+#include "util/broken.hpp"
+
 namespace tetcut::surface {
 namespace {
 
@@ -193,7 +195,7 @@ void triangulate_convex_polygon(std::vector<std::uint8_t> strict, bool reverse, 
     for (int i = start, k = 0; k < remaining && ear < 0; i = next[i], ++k) {
       if (strict[i] && (strict_count > 3 || !strict[prev[i]] || !strict[next[i]])) ear = i;
     }
-    if (ear < 0) throw std::logic_error("surface: a polygon has no clippable corner");
+    if (ear < 0) broken("surface", "a polygon has no clippable corner");
     emit(prev[ear], ear, next[ear]);
     strict[prev[ear]] = strict[next[ear]] = 1;
     next[prev[ear]] = next[ear];
