@@ -48,13 +48,6 @@ using tcp = asio::ip::tcp;
 using Json = nlohmann::json;
 using Message = std::shared_ptr<const std::string>;
 
-// A topology as the pages are sent it: whole, and as the change from the version before (null
-// when there is none).
-struct Topology {
-  std::uint32_t version = 0;
-  Message full, change;
-};
-using TopologyPtr = std::shared_ptr<const Topology>;
 
 // A page's pending text messages beyond this are dropped (oldest first): a page that does not
 // read cannot grow the server's memory.
@@ -103,6 +96,17 @@ std::pair<std::string_view, std::string_view> path_and_token(std::string_view ta
 bool loopback(const std::string& host) { return host == "127.0.0.1" || host == "localhost" || host == "::1"; }
 
 }  // namespace
+
+namespace live {
+// A topology as the pages are sent it: whole, and as the change from the version before (null
+// when there is none). In a named namespace: the server's Impl holds it, and a member whose type
+// has internal linkage is an error in a unity build.
+struct ServedTopology {
+  std::uint32_t version = 0;
+  std::shared_ptr<const std::string> full, change;
+};
+}  // namespace live
+using TopologyPtr = std::shared_ptr<const live::ServedTopology>;
 
 struct LiveServer::Impl {
   class Page;
@@ -205,7 +209,7 @@ struct LiveServer::Impl {
 
   void publish_topology_and_frame() {
     live::TopologyEncoder::Messages messages = topology_encoder.encode(++topology_version, *session, &pieces);
-    auto topology = std::make_shared<Topology>();
+    auto topology = std::make_shared<live::ServedTopology>();
     topology->version = messages.version;
     topology->full = std::make_shared<const std::string>(std::move(messages.full));
     if (!messages.change.empty()) topology->change = std::make_shared<const std::string>(std::move(messages.change));
