@@ -41,8 +41,9 @@ struct SurfaceIntersections {
 ///   other by about its tolerance before anything opens them); and pairs on the two
 ///   sides of one cut triangle whose six corners are all such unopened points (the two sides'
 ///   triangulations of a polygon overlap without always sharing a corner); and pairs that touch
-///   in the material (decided exactly, or apart there by no more than the rounding of rest
-///   points, 64 ulps as above) and now cross by at most `opened` (one reaches no further than
+///   in the material (decided exactly, or apart there by no more than `opened` or the rounding
+///   of rest points, 64 ulps as above: surface contact leaves pairs within its allowance in the
+///   material out of its barrier, as touching) and now cross by at most `opened` (one reaches no further than
 ///   that behind the other, the material being behind each: the sides of a cut pressed
 ///   together, which slide along each other as each bulges). So the two sides of a fresh cut,
 ///   which coincide, are not counted, and are as soon as they have moved apart and cross, or

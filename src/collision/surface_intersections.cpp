@@ -119,8 +119,13 @@ SurfaceIntersections count_surface_intersections(const MaterialSurface& surface,
     const auto ra = rest(a), rb = rest(b);
     if (!geometry::collinear(ra[0], ra[1], ra[2]) && !geometry::collinear(rb[0], rb[1], rb[2]) && triangles_intersect(ra, rb)) return true;
     // Copies may round one exact point differently (a junction of two cuts is placed from each
-    // side's planes): triangles meeting there can miss each other by an ulp.
-    return triangle_distance(ra, rb) <= rounding * rest_scale;
+    // side's planes): triangles meeting there can miss each other by an ulp. And triangles
+    // apart by no more than `opened` there touch as far as surface contact can tell: it leaves
+    // such pairs of joined copies out of its barrier, as touching in the material (within its
+    // guards' allowance), so they may come that close to crossing. Where a cut's rim meets the
+    // outer surface, the two sides' fans over their polygons put corners a little apart on the
+    // rim (a wall's triangle and the neighbouring top face's 2e-4 apart in the folded flap).
+    return triangle_distance(ra, rb) <= std::max(rounding * rest_scale, opened);
   };
   std::vector<spatial::Aabb> boxes(static_cast<std::size_t>(F));
   std::vector<std::uint8_t> degenerate(static_cast<std::size_t>(F), 0);

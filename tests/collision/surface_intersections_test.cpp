@@ -91,6 +91,33 @@ TEST(SurfaceIntersections, SidesOfACutPressedAndSlidCountOnlyDeeperThanAllowed) 
   EXPECT_GT(count_surface_intersections(b.result.surface, b.copies, moved(b, Vec3(-0.2, -0.1, 0.1)), 2 * pressed).intersecting_pairs, 10);
 }
 
+// Where a cut's rim meets the outer surface: a wall (plane x = 0, material at x > 0) and the top
+// face beside it of another copy (plane z = 0, material below), 2e-4 apart in the material, as the
+// two sides' fans over their polygons may leave them. The wall moved 3e-4 to -x and 1e-4 up
+// pierces the top face, whose edge then reaches 1e-4 behind the wall: within an allowance that
+// covers both the gap and the depth, not counted; with less allowed, or pressed 0.01 in, counted.
+TEST(SurfaceIntersections, ARimApartInTheMaterialByLessThanAllowedCountsOnlyPressedDeeper) {
+  constexpr double kGap = 2e-4;
+  MaterialSurface surface;
+  surface.surface.vertices.resize(6, 3);
+  surface.surface.vertices << 0, 0, 0, 0, 1, 0, 0, 0.5, -1,  // the wall, normal -x
+      -kGap, 0.2, 0, -kGap, 0.8, 0, -1, 0.2, 0;              // the top face, normal +z
+  surface.surface.triangles.resize(2, 3);
+  surface.surface.triangles << 0, 1, 2, 3, 4, 5;
+  surface.triangle_tet = {0, 1};
+  surface.triangle_source = {0, -1};
+  const std::vector<std::array<Index, 4>> copies = {{0, 1, 2, 3}, {4, 5, 6, 7}};
+  const auto pressed = [&](double by) {
+    Points at = surface.surface.vertices;
+    for (Index v = 0; v < 3; ++v) at.row(v) += Eigen::RowVector3d(-kGap - by, 0, 1e-4);
+    return at;
+  };
+  EXPECT_EQ(count_surface_intersections(surface, copies, surface.surface.vertices, 1e-3).intersecting_pairs, 0);
+  EXPECT_EQ(count_surface_intersections(surface, copies, pressed(1e-4), 1e-3).intersecting_pairs, 0);
+  EXPECT_EQ(count_surface_intersections(surface, copies, pressed(1e-4), 5e-5).intersecting_pairs, 1);
+  EXPECT_EQ(count_surface_intersections(surface, copies, pressed(1e-2), 1e-3).intersecting_pairs, 1);
+}
+
 // One piece: an incision x = 0.5 from the top down to z = 0.3. Its right lip, pushed left far
 // from the incision's end, passes through the left lip: parts of one piece, seen.
 TEST(SurfaceIntersections, LipsOfAnIncisionCrossingAreSeen) {
