@@ -21,8 +21,8 @@ int main(int argc, char** argv) {
   const int steps = argc > 2 ? std::atoi(argv[2]) : 60;
   Scene scene = load_scene(path);
   std::printf("scene %s, %d steps from rest\n", path.c_str(), steps);
-  std::printf("%-16s %8s %8s %10s %10s %12s %10s %10s %10s\n", "self_collision", "tets", "surface", "median ms", "p99 ms", "contact pairs",
-              "ccd ms", "rebuilds", "candidates");
+  std::printf("%-16s %8s %8s %10s %10s %12s %10s %10s %12s %10s\n", "self_collision", "tets", "surface", "median ms", "p99 ms",
+              "contact pairs", "ccd ms", "rebuilds", "copy pairs", "candidates");
   for (const bool on : {false, true}) {
     scene.self_collision = on;
     Session session(scene);
@@ -37,8 +37,8 @@ int main(int argc, char** argv) {
       ccd += 1e3 * step.report.contact_seconds;
     }
     const sim::Simulator::SurfaceContactState contact = session.simulator().surface_contact();
-    std::printf("%-16s %8d %8d %10.2f %10.2f %12d %10.2f %10d %10d\n", on ? "on" : "off", session.simulator().num_tets(),
+    std::printf("%-16s %8d %8d %10.2f %10.2f %12d %10.2f %10d %12d %10d\n", on ? "on" : "off", session.simulator().num_tets(),
                 session.surface().surface.num_triangles(), bench::median(ms), bench::percentile(ms, 0.99), pairs, ccd / steps,
-                contact.rebuilds, contact.candidates);
+                contact.rebuilds, contact.copy_pair_rebuilds, contact.candidates);
   }
 }

@@ -291,13 +291,14 @@ class Simulator {
   void clear_contact_surface();
   /// What surface contact is working with: the thickness and stiffness in use, the candidate
   /// pairs of its broad phase, the pairs of copies still joined across a cut, the guards over
-  /// them in the last step, and how often the broad phase was rebuilt; and how far the two sides
+  /// them in the last step, and how often the broad phase was rebuilt (its candidate pairs, and
+  /// the pairs of copies whose boxes come close, under them, less often); and how far the two sides
   /// of a fresh cut may press into each other (a tenth of the thickness: what their guards hold
   /// each vertex to; see src/sim/surface_contact.hpp).
   struct SurfaceContactState {
     bool enabled = false;
     double thickness = 0, stiffness = 0, fresh_cut_allowance = 0;
-    Index candidates = 0, joined_copy_pairs = 0, guards = 0, rebuilds = 0;
+    Index candidates = 0, joined_copy_pairs = 0, guards = 0, rebuilds = 0, copy_pair_rebuilds = 0;
   };
   SurfaceContactState surface_contact() const;
   /// The surface contact energy at the current positions (+inf if two counted parts touch).

@@ -220,6 +220,7 @@ Simulator::SurfaceContactState Simulator::surface_contact() const {
   out.guards = c.num_guards();
   out.fresh_cut_allowance = c.enabled() ? c.guard_allowance() : 0.0;
   out.rebuilds = c.num_rebuilds();
+  out.copy_pair_rebuilds = c.num_pair_rebuilds();
   return out;
 }
 

@@ -6,6 +6,8 @@
 
 #include "sim/block_sparse.hpp"
 
+#include <tbb/enumerable_thread_specific.h>
+
 #include <algorithm>
 #include <cmath>
 
@@ -149,6 +151,7 @@ void SurfaceContact::clear_surface() {
   edges_.clear();
   edge_copy_.clear();
   copy_nodes_.clear();
+  surface_nodes_.clear();
   candidates_.clear();
   proximities_.clear();
   friction_.clear();
@@ -156,6 +159,7 @@ void SurfaceContact::clear_surface() {
   rho_ = -1;
   measured_ = -1;
   tree_built_ = false;
+  pairs_radius_ = -1;
   group_copy_.clear();
 }
 
@@ -194,6 +198,15 @@ void SurfaceContact::set_surface(const MaterialSurface& surface, std::span<const
     vertex_nodes_[v] = copy_nodes_[static_cast<std::size_t>(vertex_copy_[v])];
     vertex_weights_[v] = surface.vertex_weights.row(static_cast<Index>(v)).transpose();
   }
+  surface_nodes_.clear();
+  weight_bound_ = 1;
+  for (std::size_t v = 0; v < V; ++v) {
+    surface_nodes_.insert(surface_nodes_.end(), vertex_nodes_[v].begin(), vertex_nodes_[v].end());
+    weight_bound_ = std::max(weight_bound_, vertex_weights_[v].cwiseAbs().sum());
+  }
+  std::sort(surface_nodes_.begin(), surface_nodes_.end());
+  surface_nodes_.erase(std::unique(surface_nodes_.begin(), surface_nodes_.end()), surface_nodes_.end());
+
   triangles_.resize(F);
   triangle_copy_.assign(surface.triangle_tet.begin(), surface.triangle_tet.end());
   // Edges, each once, with the copy of the first triangle that has it.
@@ -293,6 +306,7 @@ void SurfaceContact::group_primitives() {
   bucket(triangle_copy_, &triangle_start_, &group_triangles_);
   bucket(edge_copy_, &edge_start_, &group_edges_);
   tree_built_ = false;
+  pairs_radius_ = -1;
 }
 
 void SurfaceContact::place(const Points& at, Points* y) const {
@@ -370,28 +384,77 @@ void SurfaceContact::measure(Measure which) {
   });
 }
 
+template <typename NodeMotion>
+double SurfaceContact::surface_motion(const NodeMotion& node_motion) const {
+  // Each vertex's motion from its nodes' (sum_i w_i d_i), relative to the centre of the box of
+  // them all: two passes over the vertices, in parallel, nothing placed or allocated. O(V).
+  const auto V = static_cast<Index>(vertex_nodes_.size());
+  if (V == 0) return 0;
+  const auto motion = [&](Index v) {
+    Vec3 d = Vec3::Zero();
+    for (int i = 0; i < 4; ++i) d += vertex_weights_[v][i] * node_motion(vertex_nodes_[v][i]);
+    return d;
+  };
+  const Index chunks = (V + kNodeChunk - 1) / kNodeChunk;
+  motion_boxes_.assign(static_cast<std::size_t>(chunks), spatial::Aabb{});
+  for_chunks(V, kNodeChunk, [&](Index begin, Index end, Index chunk) {
+    for (Index v = begin; v < end; ++v) motion_boxes_[static_cast<std::size_t>(chunk)].extend(motion(v));
+  });
+  spatial::Aabb all;
+  for (const spatial::Aabb& box : motion_boxes_) all.extend(box);
+  const Vec3 centre = 0.5 * (all.min + all.max);
+  motion_largest_.assign(static_cast<std::size_t>(chunks), 0.0);
+  for_chunks(V, kNodeChunk, [&](Index begin, Index end, Index chunk) {
+    double largest = 0;
+    for (Index v = begin; v < end; ++v) largest = std::max(largest, (motion(v) - centre).squaredNorm());
+    motion_largest_[static_cast<std::size_t>(chunk)] = largest;
+  });
+  return std::sqrt(*std::max_element(motion_largest_.begin(), motion_largest_.end()));
+}
+
+double SurfaceContact::motion_since(const Points& at, const Points& since, double allowed) const {
+  // First a bound from the nodes alone: a vertex moves by sum_i w_i d_i (the weights sum to 1),
+  // so beyond a common translation T by at most sum_i |w_i| max_i |d_i - T|. O(surface nodes),
+  // 2.6k against 46k vertices on the femur; but loose after a cut, where nodes of copies with
+  // little material swing further than any vertex they carry: then the vertices themselves.
+  if (!surface_nodes_.empty()) {
+    Vec3 low = Vec3::Constant(std::numeric_limits<double>::infinity()), high = -low;
+    for (const Index n : surface_nodes_) {
+      const Vec3 d = (at.row(n) - since.row(n)).transpose();
+      low = low.cwiseMin(d);
+      high = high.cwiseMax(d);
+    }
+    const Vec3 centre = 0.5 * (low + high);
+    double largest = 0;
+    for (const Index n : surface_nodes_) largest = std::max(largest, ((at.row(n) - since.row(n)).transpose() - centre).squaredNorm());
+    const double bound = weight_bound_ * std::sqrt(largest);
+    if (bound <= allowed) return bound;
+  }
+  return surface_motion([&](Index n) { return Vec3((at.row(n) - since.row(n)).transpose()); });
+}
+
 void SurfaceContact::cover(const Points& at, double sweep) {
   if (sutures_changed_) mark_joined();
-  place(at, &placed_);
-  if (placed_.rows() != y_.rows() || placed_ != y_) {
-    y_.swap(placed_);
-    measured_ = -1;
-  }
   const double dhat = settings_.thickness;
-  if (rho_ >= 0 && reference_.rows() == y_.rows()) {
-    // How far any vertex moved relative to the others since the list was built: a motion common
-    // to all (a translation T) changes no distance, so the displacements are measured from the
-    // centre of their box (|d_i - T| for that T bounds each vertex's share of a pair's change).
-    // Falling pieces then keep their list.
-    double moved = 0;
-    if (y_.rows() > 0) {
-      const Points displacement = y_ - reference_;
-      const Eigen::RowVector3d centre = 0.5 * (displacement.colwise().minCoeff() + displacement.colwise().maxCoeff());
-      moved = (displacement.rowwise() - centre).rowwise().norm().maxCoeff();
+  // How far any vertex moved relative to the others since the list was built: a motion common
+  // to all changes no distance, so falling pieces keep their list (see surface_motion).
+  if (rho_ >= 0 && reference_nodes_.rows() == at.rows() && 2 * (motion_since(at, reference_nodes_, (rho_ - dhat) / 2 - sweep) + sweep) + dhat <= rho_) {
+    // The list holds: the vertices are placed only where there are candidates to measure.
+    if (candidates_.empty()) {
+      measured_ = -1;
+      return;
     }
-    if (2 * (moved + sweep) + dhat <= rho_) return;
+    place(at, &placed_);
+    if (placed_.rows() != y_.rows() || placed_ != y_) {
+      y_.swap(placed_);
+      measured_ = -1;
+    }
+    return;
   }
+  place(at, &y_);
+  measured_ = -1;
   reference_ = y_;
+  reference_nodes_ = at;
   // Room for motions of dhat / 2 more before the next rebuild (more slack, for one more move
   // like this one, was measured slower on the hanging femur: its larger lists cost more than
   // the rebuilds they saved).
@@ -403,44 +466,29 @@ void SurfaceContact::rebuild(double rho) {
   measured_ = -1;
   ++rebuilds_;
   const Points& y = reference_;
-  // Boxes of every triangle and edge: a pair's boxes are compared before its distance is
-  // measured (most pairs of nearby copies are far apart, and boxes cost a few comparisons).
-  triangle_boxes_.assign(triangles_.size(), spatial::Aabb{});
-  edge_boxes_.assign(edges_.size(), spatial::Aabb{});
-  for_chunks(static_cast<Index>(triangles_.size()), kNodeChunk, [&](Index begin, Index end, Index) {
-    for (Index t = begin; t < end; ++t) {
-      for (const Index v : triangles_[static_cast<std::size_t>(t)]) triangle_boxes_[static_cast<std::size_t>(t)].extend(Vec3(y.row(v).transpose()));
-    }
-  });
-  for_chunks(static_cast<Index>(edges_.size()), kNodeChunk, [&](Index begin, Index end, Index) {
-    for (Index e = begin; e < end; ++e) {
-      for (const Index v : edges_[static_cast<std::size_t>(e)]) edge_boxes_[static_cast<std::size_t>(e)].extend(Vec3(y.row(v).transpose()));
-    }
-  });
-  // And of each copy's primitives, in a hierarchy built once per surface and refitted: its
-  // vertices and triangles (an edge is a side of a triangle the same copy owns).
+  const auto corner = [&](Index v) { return Vec3(y.row(v).transpose()); };
+  // Each copy's box: its vertices and its triangles' corners (an edge is a side of a triangle the
+  // same copy owns). O(V + F).
   const auto G = static_cast<Index>(group_copy_.size());
-  std::vector<spatial::Aabb> boxes(static_cast<std::size_t>(G));
+  copy_boxes_.assign(static_cast<std::size_t>(G), spatial::Aabb{});
   for_chunks(G, kNodeChunk, [&](Index begin, Index end, Index) {
     for (Index g = begin; g < end; ++g) {
-      spatial::Aabb& box = boxes[static_cast<std::size_t>(g)];
-      for (Index k = vertex_start_[g]; k < vertex_start_[g + 1]; ++k) box.extend(Vec3(y.row(group_vertices_[k]).transpose()));
-      for (Index k = triangle_start_[g]; k < triangle_start_[g + 1]; ++k) box.extend(triangle_boxes_[static_cast<std::size_t>(group_triangles_[k])]);
+      spatial::Aabb& box = copy_boxes_[static_cast<std::size_t>(g)];
+      for (Index k = vertex_start_[g]; k < vertex_start_[g + 1]; ++k) box.extend(corner(group_vertices_[k]));
+      for (Index k = triangle_start_[g]; k < triangle_start_[g + 1]; ++k) {
+        for (const Index v : triangles_[static_cast<std::size_t>(group_triangles_[k])]) box.extend(corner(v));
+      }
     }
   });
-  if (!tree_built_) {
-    copy_tree_ = spatial::BoxTree(boxes);
-    tree_built_ = true;
-  } else {
-    copy_tree_.refit(std::move(boxes));
-  }
-  // Pairs of copies whose boxes come within rho, each once (g < h), neighbours left out; then
-  // their primitives against each other. Per fixed chunk of copies, joined in chunk order.
+  cover_copy_pairs(rho);
+  // The pairs of copies whose boxes come within rho, then their primitives against each other.
+  // Per fixed chunk of pairs, joined in chunk order: the pairs are in (g, h) order, and so are
+  // the candidates.
   constexpr Index kChunk = 64;
-  const Index chunks = (G + kChunk - 1) / kChunk;
+  const auto P = static_cast<Index>(copy_pairs_.size());
+  const Index chunks = (P + kChunk - 1) / kChunk;
   std::vector<std::vector<Candidate>> found(static_cast<std::size_t>(chunks));
-  for_chunks(G, kChunk, [&](Index begin, Index end, Index chunk) {
-    std::vector<Index> hits;
+  for_chunks(P, kChunk, [&](Index begin, Index end, Index chunk) {
     std::vector<Candidate>& out = found[static_cast<std::size_t>(chunk)];
     const auto consider = [&](Candidate c) {
       const std::array<Index, 4> k = corners(c);
@@ -454,51 +502,58 @@ void SurfaceContact::rebuild(double rho) {
       c.rest_touching = rest < guard_allowance() || !(now > 0) ? 1 : 0;
       out.push_back(c);
     };
-    // The primitives of copy g that reach copy h's box, then those pairs: most pairs of nearby
+    // The primitives of one copy that reach another's box, with their boxes: most pairs of nearby
     // copies have none (boxes of tets that share no node overlap often in a BCC lattice).
-    std::vector<Index> near_vertices, near_triangles, near_edges_g, near_edges_h;
+    using Near = std::vector<std::pair<Index, spatial::Aabb>>;
+    Near near_vertices, near_triangles, near_edges_g, near_edges_h;
     const auto gather = [&](const std::vector<Index>& start, const std::vector<Index>& items, Index g, const spatial::Aabb& reach,
-                            const auto& box_of, std::vector<Index>* into) {
+                            const auto& box_of, Near* into) {
       into->clear();
       for (Index k = start[g]; k < start[g + 1]; ++k) {
-        if (reach.meets(box_of(items[k]))) into->push_back(items[k]);
+        const spatial::Aabb box = box_of(items[k]);
+        if (reach.meets(box)) into->emplace_back(items[k], box);
       }
     };
     const auto vertex_box = [&](Index v) {
       spatial::Aabb b;
-      b.extend(Vec3(y.row(v).transpose()));
+      b.extend(corner(v));
       return b;
     };
-    const auto triangle_box = [&](Index t) { return triangle_boxes_[static_cast<std::size_t>(t)]; };
-    const auto edge_box = [&](Index e) { return edge_boxes_[static_cast<std::size_t>(e)]; };
-    const std::vector<spatial::Aabb>& copy_boxes = copy_tree_.mutable_boxes();
+    const auto triangle_box = [&](Index t) {
+      spatial::Aabb b;
+      for (const Index v : triangles_[static_cast<std::size_t>(t)]) b.extend(corner(v));
+      return b;
+    };
+    const auto edge_box = [&](Index e) {
+      spatial::Aabb b;
+      for (const Index v : edges_[static_cast<std::size_t>(e)]) b.extend(corner(v));
+      return b;
+    };
+    const auto box = [&](Index g) -> const spatial::Aabb& { return copy_boxes_[static_cast<std::size_t>(g)]; };
     const auto vertices_against_triangles = [&](Index g, Index h, std::uint64_t key) {
-      gather(vertex_start_, group_vertices_, g, grown(copy_boxes[static_cast<std::size_t>(h)], rho), vertex_box, &near_vertices);
+      gather(vertex_start_, group_vertices_, g, grown(box(h), rho), vertex_box, &near_vertices);
       if (near_vertices.empty()) return;
-      gather(triangle_start_, group_triangles_, h, grown(copy_boxes[static_cast<std::size_t>(g)], rho), triangle_box, &near_triangles);
-      for (const Index v : near_vertices) {
-        const spatial::Aabb reach = grown(vertex_box(v), rho);
-        for (const Index t : near_triangles) {
-          if (reach.meets(triangle_boxes_[static_cast<std::size_t>(t)])) consider({v, t, 0, 0, 0, 0, 0, key});
+      gather(triangle_start_, group_triangles_, h, grown(box(g), rho), triangle_box, &near_triangles);
+      for (const auto& [v, v_box] : near_vertices) {
+        const spatial::Aabb reach = grown(v_box, rho);
+        for (const auto& [t, t_box] : near_triangles) {
+          if (reach.meets(t_box)) consider({v, t, 0, 0, 0, 0, 0, key});
         }
       }
     };
-    for (Index g = begin; g < end; ++g) {
-      hits.clear();
-      copy_tree_.query(grown(copy_boxes[static_cast<std::size_t>(g)], rho), &hits);
-      for (const Index h : hits) {
-        if (h <= g || neighbours(group_copy_[g], group_copy_[h])) continue;
-        const std::uint64_t key = copy_pair(group_copy_[g], group_copy_[h]);
-        vertices_against_triangles(g, h, key);
-        vertices_against_triangles(h, g, key);
-        gather(edge_start_, group_edges_, g, grown(copy_boxes[static_cast<std::size_t>(h)], rho), edge_box, &near_edges_g);
-        if (near_edges_g.empty()) continue;
-        gather(edge_start_, group_edges_, h, grown(copy_boxes[static_cast<std::size_t>(g)], rho), edge_box, &near_edges_h);
-        for (const Index e : near_edges_g) {
-          const spatial::Aabb reach = grown(edge_boxes_[static_cast<std::size_t>(e)], rho);
-          for (const Index f : near_edges_h) {
-            if (reach.meets(edge_boxes_[static_cast<std::size_t>(f)])) consider({e, f, 1, 0, 0, 0, 0, key});
-          }
+    for (Index i = begin; i < end; ++i) {
+      const auto [g, h] = copy_pairs_[static_cast<std::size_t>(i)];
+      if (!grown(box(g), rho).meets(box(h))) continue;
+      const std::uint64_t key = copy_pair(group_copy_[g], group_copy_[h]);
+      vertices_against_triangles(g, h, key);
+      vertices_against_triangles(h, g, key);
+      gather(edge_start_, group_edges_, g, grown(box(h), rho), edge_box, &near_edges_g);
+      if (near_edges_g.empty()) continue;
+      gather(edge_start_, group_edges_, h, grown(box(g), rho), edge_box, &near_edges_h);
+      for (const auto& [e, e_box] : near_edges_g) {
+        const spatial::Aabb reach = grown(e_box, rho);
+        for (const auto& [f, f_box] : near_edges_h) {
+          if (reach.meets(f_box)) consider({e, f, 1, 0, 0, 0, 0, key});
         }
       }
     }
@@ -506,6 +561,34 @@ void SurfaceContact::rebuild(double rho) {
   candidates_.clear();
   for (const auto& chunk : found) candidates_.insert(candidates_.end(), chunk.begin(), chunk.end());
   mark_joined();
+}
+
+void SurfaceContact::cover_copy_pairs(double rho) {
+  const double dhat = settings_.thickness;
+  // Valid while no gap between two copies' boxes can have shrunk from more than the list's
+  // radius to rho or less: boxes move with their vertices (see surface_motion).
+  if (pairs_radius_ >= 0 && pairs_reference_.rows() == reference_nodes_.rows() &&
+      rho + 2 * motion_since(reference_nodes_, pairs_reference_, (pairs_radius_ - rho) / 2) <= pairs_radius_) {
+    return;
+  }
+  pairs_reference_ = reference_nodes_;
+  pairs_radius_ = rho + 2 * kPairSlack * dhat;
+  ++pair_rebuilds_;
+  const double radius = pairs_radius_;
+  if (!tree_built_) {
+    copy_tree_ = spatial::BoxTree(copy_boxes_);
+    tree_built_ = true;
+  } else {
+    copy_tree_.refit(copy_boxes_);
+  }
+  // Each pair once (g < h), neighbours left out, sorted: the candidates come in their order.
+  tbb::enumerable_thread_specific<std::vector<std::array<Index, 2>>> found;
+  copy_tree_.self_join(radius, [&](Index g, Index h) {
+    if (!neighbours(group_copy_[g], group_copy_[h])) found.local().push_back({std::min(g, h), std::max(g, h)});
+  });
+  copy_pairs_.clear();
+  for (const auto& mine : found) copy_pairs_.insert(copy_pairs_.end(), mine.begin(), mine.end());
+  std::sort(copy_pairs_.begin(), copy_pairs_.end());
 }
 
 void SurfaceContact::mark_joined() {
@@ -562,25 +645,9 @@ void SurfaceContact::clear_sutures() {
 
 double SurfaceContact::max_step(const Points& from, const double* direction) {
   if (!enabled()) return 1;
-  // The surface vertices' motion over the whole step.
-  const auto V = static_cast<Index>(vertex_nodes_.size());
-  moved_.resize(V, 3);
-  for_chunks(V, kNodeChunk, [&](Index begin, Index end, Index) {
-    for (Index v = begin; v < end; ++v) {
-      Vec3 d = Vec3::Zero();
-      for (int i = 0; i < 4; ++i) {
-        const double* n = direction + 3 * static_cast<std::size_t>(vertex_nodes_[v][i]);
-        d += vertex_weights_[v][i] * Vec3(n[0], n[1], n[2]);
-      }
-      moved_.row(v) = d.transpose();
-    }
-  });
-  // The motion relative to the others (a common translation moves no pair closer; see cover).
-  double sweep = 0;
-  if (V > 0) {
-    const Eigen::RowVector3d centre = 0.5 * (moved_.colwise().minCoeff() + moved_.colwise().maxCoeff());
-    sweep = (moved_.rowwise() - centre).rowwise().norm().maxCoeff();
-  }
+  // How far any vertex moves over the whole step, relative to the others (see surface_motion).
+  const Eigen::Map<const Points> motion(direction, from.rows(), 3);
+  const double sweep = surface_motion([&](Index n) { return Vec3(motion.row(n).transpose()); });
   if (!(sweep > 0)) return 1;
   cover(from, sweep);
   std::vector<double> smallest(static_cast<std::size_t>((static_cast<Index>(candidates_.size()) + kNodeChunk - 1) / kNodeChunk) + 1, 1.0);
@@ -594,7 +661,8 @@ double SurfaceContact::max_step(const Points& from, const double* direction) {
       Vec3 mean = Vec3::Zero();
       for (int i = 0; i < 4; ++i) {
         y[i] = y_.row(corner[i]).transpose();
-        d[i] = moved_.row(corner[i]).transpose();
+        d[i] = Vec3::Zero();
+        for (int j = 0; j < 4; ++j) d[i] += vertex_weights_[corner[i]][j] * motion.row(vertex_nodes_[corner[i]][j]).transpose();
         mean += d[i] / 4;
       }
       // A bound of how fast the distance can shrink: the motions relative to their mean.

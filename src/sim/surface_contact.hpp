@@ -62,15 +62,19 @@
 // included, while they hold: they are there to bring the two sides back together.
 //
 // Broad phase: per copy, a box around the primitives it owns (a vertex's copy, a triangle's, an
-// edge's first triangle's), in a hierarchy refitted at each rebuild; pairs of copies whose boxes
-// come within the radius rho, neighbours left out, then their primitives against each other.
-// Most primitives near a given one are in its own or neighbouring copies and never listed, so
-// the work goes with the pairs of copies that can really touch (per primitive queries were 100
-// times slower on a fine embedded surface). The candidates (all pairs within rho at the reference
-// positions) serve every evaluation whose vertices have moved less than (rho - dhat) / 2 from
-// there (a Verlet list), and are rebuilt otherwise. O(C log C + copy pairs near x their
-// primitives) per rebuild, C copies; O(V + candidates) per evaluation; both parallel; results do
-// not depend on the number of threads.
+// edge's first triangle's); pairs of copies whose boxes come within the radius rho, neighbours
+// left out, then their primitives against each other. Most primitives near a given one are in
+// its own or neighbouring copies and never listed, so the work goes with the pairs of copies that
+// can really touch (per primitive queries were 100 times slower on a fine embedded surface). The
+// candidates (all pairs within rho at the reference positions) serve every evaluation whose
+// vertices have moved less than (rho - dhat) / 2 from there (a Verlet list), and are rebuilt
+// otherwise. Under them a coarser Verlet list of the pairs of copies, found within rho plus room
+// for 10 dhat of motion by a self-join of a box hierarchy over the copies (refitted), serves
+// several rebuilds. Motions are measured by the nodes first (O(nodes)), by the vertices where that
+// bound is too loose (O(V)); a list kept with no candidates places no vertex. O(V + F + copy pairs
+// x their primitives) per rebuild, O(C log C + copy pairs) more when the pairs are found again,
+// C copies; O(nodes + candidates) per evaluation; all parallel; results do not depend on the
+// number of threads.
 
 #include <tetcut/cutter.hpp>
 #include <tetcut/sim.hpp>
@@ -184,6 +188,8 @@ class SurfaceContact {
   Index num_candidates() const { return static_cast<Index>(candidates_.size()); }
   Index num_joins() const { return static_cast<Index>(joins_.size()); }
   Index num_rebuilds() const { return rebuilds_; }
+  /// How often the pairs of copies under the candidates were found again (see copy_pairs_).
+  Index num_pair_rebuilds() const { return pair_rebuilds_; }
   /// Mean edge length of the surface (the defaults are derived from it).
   double mean_edge_length() const { return mean_edge_; }
 
@@ -200,7 +206,22 @@ class SurfaceContact {
   void place(const Points& at, Points* y) const;
   /// Makes the candidates cover positions `at` and motions of up to `sweep` from there.
   void cover(const Points& at, double sweep);
+  /// How far the surface vertices move, beyond a motion common to all, when each node n moves
+  /// by node_motion(n) (a Vec3): the largest distance of a vertex's motion from the centre of
+  /// their box. O(V), in parallel.
+  template <typename NodeMotion>
+  double surface_motion(const NodeMotion& node_motion) const;
+  /// A bound of the same for the nodes moving from `since` to `at`, exact (as above) unless a
+  /// cheaper one, from the nodes alone, is within `allowed` already.
+  double motion_since(const Points& at, const Points& since, double allowed) const;
   void rebuild(double rho);
+  /// Makes copy_pairs_ hold every pair of copies whose boxes (copy_boxes_) are within rho of each
+  /// other: kept while the vertices' motion since it was made allows, else made again with room
+  /// for kPairSlack * dhat more of it (on the hanging femur, 2 remade it at 75 of 105 rebuilds
+  /// of the candidates, 10 at 26 and 30 at 10, whose longer list took longer to go through;
+  /// 10 was fastest, and 3, 5 and 20 measured no better).
+  void cover_copy_pairs(double rho);
+  static constexpr double kPairSlack = 10;
   void group_primitives();
   /// The candidates' joined and sutured flags, from joins_ and sutured_.
   void mark_joined();
@@ -257,7 +278,15 @@ class SurfaceContact {
   // The Verlet list: candidates within rho_ of each other at vertex positions reference_.
   std::vector<Candidate> candidates_;
   std::vector<collision::Proximity> proximities_;
-  Points reference_, y_, moved_, placed_;
+  Points reference_, y_, placed_;
+  // The nodes' positions where the candidates were listed (reference_ is the vertices').
+  Points reference_nodes_;
+  // The nodes that carry surface vertices, and the largest sum of |weights| of a vertex.
+  std::vector<Index> surface_nodes_;
+  double weight_bound_ = 1;
+  // Scratch of surface_motion, per chunk of vertices.
+  mutable std::vector<spatial::Aabb> motion_boxes_;
+  mutable std::vector<double> motion_largest_;
   // What proximities_ hold for the candidates at y_ (a Measure), or -1: a step's end (the joins)
   // and the next step's start (the guards) measure the same positions.
   int measured_ = -1;
@@ -266,10 +295,18 @@ class SurfaceContact {
   // ascending order), and a box hierarchy over each copy's primitives.
   std::vector<Index> group_copy_;
   std::vector<Index> vertex_start_, group_vertices_, triangle_start_, group_triangles_, edge_start_, group_edges_;
+  std::vector<spatial::Aabb> copy_boxes_;  // at reference_
+  // A second, coarser list under the candidates: the pairs of copies (group indices g < h, not
+  // neighbours) whose boxes came within pairs_radius_ of each other at pairs_reference_. It
+  // outlasts several rebuilds of the candidates, which then look only at these pairs instead of
+  // querying the hierarchy once per copy (on the hanging femur that was most of a rebuild: about
+  // 18 copies met per query, of which all but a few were the copy itself or its neighbours).
+  std::vector<std::array<Index, 2>> copy_pairs_;
+  Points pairs_reference_;
+  double pairs_radius_ = -1;
   spatial::BoxTree copy_tree_;
-  std::vector<spatial::Aabb> triangle_boxes_, edge_boxes_;
   bool tree_built_ = false;
-  Index rebuilds_ = 0;
+  Index rebuilds_ = 0, pair_rebuilds_ = 0;
 };
 
 template <typename Visit>

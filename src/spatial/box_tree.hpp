@@ -5,6 +5,8 @@
 
 #include <tetcut/types.hpp>
 
+#include <tbb/parallel_invoke.h>
+
 #include <vector>
 
 namespace tetcut::spatial {
@@ -44,7 +46,79 @@ class BoxTree {
 
   Index size() const { return static_cast<Index>(boxes_.size()); }
 
+  /// Calls visit(i, j) once for every pair of boxes i != j that come within `distance` of each
+  /// other (i grown by it meets j), in no fixed order and from several threads at once (the
+  /// upper levels of the hierarchy run as parallel tasks). A traversal of the hierarchy against
+  /// itself: each pair of nodes is looked at once, where a query per box would start from the
+  /// root for each and meet every pair twice.
+  template <typename Visit>
+  void self_join(double distance, const Visit& visit) const {
+    if (!nodes_.empty()) join_within(0, distance, visit, 0);
+  }
+
  private:
+  // Below this depth the traversal forks into parallel tasks.
+  static constexpr int kParallelDepth = 6;
+  static Aabb grown(Aabb box, double by) {
+    box.min.array() -= by;
+    box.max.array() += by;
+    return box;
+  }
+  template <typename Visit>
+  void join_within(Index node, double distance, const Visit& visit, int depth) const {
+    const Node& n = nodes_[node];
+    if (n.count > 0) {
+      for (Index a = n.first; a < n.first + n.count; ++a) {
+        const Aabb reach = grown(boxes_[items_[a]], distance);
+        for (Index b = a + 1; b < n.first + n.count; ++b) {
+          if (reach.meets(boxes_[items_[b]])) visit(items_[a], items_[b]);
+        }
+      }
+      return;
+    }
+    if (depth < kParallelDepth) {
+      tbb::parallel_invoke([&] { join_within(n.first, distance, visit, depth + 1); },
+                           [&] { join_within(n.first + 1, distance, visit, depth + 1); },
+                           [&] { join_between(n.first, n.first + 1, distance, visit, depth + 1); });
+    } else {
+      join_within(n.first, distance, visit, depth + 1);
+      join_within(n.first + 1, distance, visit, depth + 1);
+      join_between(n.first, n.first + 1, distance, visit, depth + 1);
+    }
+  }
+  template <typename Visit>
+  void join_between(Index p, Index q, double distance, const Visit& visit, int depth) const {
+    const Node& a = nodes_[p];
+    const Node& b = nodes_[q];
+    if (!grown(a.box, distance).meets(b.box)) return;
+    if (a.count > 0 && b.count > 0) {
+      for (Index i = a.first; i < a.first + a.count; ++i) {
+        const Aabb reach = grown(boxes_[items_[i]], distance);
+        for (Index j = b.first; j < b.first + b.count; ++j) {
+          if (reach.meets(boxes_[items_[j]])) visit(items_[i], items_[j]);
+        }
+      }
+      return;
+    }
+    // Split the inner node (the larger box where both are).
+    const auto size = [](const Aabb& box) { return (box.max - box.min).sum(); };
+    const bool split_a = b.count > 0 || (a.count == 0 && size(a.box) >= size(b.box));
+    const Index first = split_a ? a.first : b.first;
+    const auto pair = [&](Index child) {
+      if (split_a) {
+        join_between(child, q, distance, visit, depth + 1);
+      } else {
+        join_between(p, child, distance, visit, depth + 1);
+      }
+    };
+    if (depth < kParallelDepth) {
+      tbb::parallel_invoke([&] { pair(first); }, [&] { pair(first + 1); });
+    } else {
+      pair(first);
+      pair(first + 1);
+    }
+  }
+
   struct Node {
     Aabb box;
     Index first = 0;  ///< leaf: first item; inner: first child (the second is first + 1)

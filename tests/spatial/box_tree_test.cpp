@@ -1,0 +1,86 @@
+// The box hierarchy: queries and the self-join against brute force on random boxes.
+
+#include "spatial/box_tree.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <array>
+#include <mutex>
+#include <random>
+#include <vector>
+
+namespace tetcut::spatial {
+namespace {
+
+std::vector<Aabb> random_boxes(int count, unsigned seed) {
+  std::mt19937 random(seed);
+  std::uniform_real_distribution<double> where(0, 1), size(0, 0.05);
+  std::vector<Aabb> boxes(static_cast<std::size_t>(count));
+  for (Aabb& box : boxes) {
+    const Vec3 corner(where(random), where(random), where(random));
+    box.extend(corner);
+    box.extend(Vec3(corner + Vec3(size(random), size(random), size(random))));
+  }
+  return boxes;
+}
+
+Aabb grown(Aabb box, double by) {
+  box.min.array() -= by;
+  box.max.array() += by;
+  return box;
+}
+
+TEST(BoxTree, QueryFindsEveryBoxThatMeetsInOrder) {
+  const std::vector<Aabb> boxes = random_boxes(500, 1);
+  const BoxTree tree(boxes);
+  for (std::size_t q = 0; q < 50; ++q) {
+    const Aabb query = grown(boxes[q], 0.02);
+    std::vector<Index> found, expected;
+    tree.query(query, &found);
+    for (std::size_t i = 0; i < boxes.size(); ++i) {
+      if (query.meets(boxes[i])) expected.push_back(static_cast<Index>(i));
+    }
+    EXPECT_EQ(found, expected);
+  }
+}
+
+// Every pair within the distance, each once, as a query per box finds them; also after the boxes
+// moved and the hierarchy was refitted, and with a box touching another at one face.
+TEST(BoxTree, SelfJoinFindsEveryPairWithinTheDistanceOnce) {
+  std::vector<Aabb> boxes = random_boxes(2000, 2);
+  boxes[1] = boxes[0];
+  boxes[1].min.x() = boxes[0].max.x() + 0.01;  // exactly the distance apart along x
+  boxes[1].max.x() = boxes[1].min.x() + 0.01;
+  BoxTree tree(boxes);
+  for (int round = 0; round < 2; ++round) {
+    if (round == 1) {
+      boxes = random_boxes(2000, 3);
+      tree.refit(boxes);
+    }
+    for (const double distance : {0.0, 0.01, 0.05}) {
+      std::vector<std::array<Index, 2>> joined, expected;
+      std::mutex lock;
+      tree.self_join(distance, [&](Index i, Index j) {
+        const std::lock_guard<std::mutex> hold(lock);
+        joined.push_back({std::min(i, j), std::max(i, j)});
+      });
+      std::sort(joined.begin(), joined.end());
+      for (std::size_t i = 0; i < boxes.size(); ++i) {
+        std::vector<Index> hits;
+        tree.query(grown(boxes[i], distance), &hits);
+        for (const Index j : hits) {
+          if (j > static_cast<Index>(i)) expected.push_back({static_cast<Index>(i), j});
+        }
+      }
+      EXPECT_EQ(joined, expected) << "round " << round << ", distance " << distance;
+      EXPECT_GT(expected.size(), 200u);  // enough pairs to cross many nodes
+      if (round == 0 && distance > 0) {
+        EXPECT_TRUE(std::binary_search(joined.begin(), joined.end(), std::array<Index, 2>{0, 1}));
+      }
+    }
+  }
+}
+
+}  // namespace
+}  // namespace tetcut::spatial
