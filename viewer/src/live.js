@@ -30,7 +30,7 @@ const api = {
 const bladeSentAt = new Map();  // blade poses' seq -> when they left, until answered or stale
 const cutSentAt = new Map();    // topology version -> when the first pose it shows left
 const cutReplyAt = new Map();   // topology version -> when the "cut" reply naming it arrived
-let topologyArrivedAt = 0, topologyReadAt = 0;  // the pending topology's arrival and reading
+let topologyArrivedAt = 0, topologyReadAt = 0;  // when the last topology message arrived, and when it was read (a cut's phases, below)
 window.tetcutLive = api;
 const showError = errorReporter(api, 'tetcut live');
 
