@@ -530,14 +530,17 @@ void SurfaceContact::rebuild(double rho) {
       return b;
     };
     const auto box = [&](Index g) -> const spatial::Aabb& { return copy_boxes_[static_cast<std::size_t>(g)]; };
-    const auto vertices_against_triangles = [&](Index g, Index h, std::uint64_t key) {
-      gather(vertex_start_, group_vertices_, g, grown(box(h), rho), vertex_box, &near_vertices);
-      if (near_vertices.empty()) return;
-      gather(triangle_start_, group_triangles_, h, grown(box(g), rho), triangle_box, &near_triangles);
-      for (const auto& [v, v_box] : near_vertices) {
-        const spatial::Aabb reach = grown(v_box, rho);
-        for (const auto& [t, t_box] : near_triangles) {
-          if (reach.meets(t_box)) consider({v, t, 0, 0, 0, 0, 0, key});
+    // The primitives of copy g (vertices or edges) near those of copy h (triangles or edges).
+    const auto primitive_pairs = [&](const std::vector<Index>& start_g, const std::vector<Index>& items_g, const auto& box_g, Near* near_g,
+                                     const std::vector<Index>& start_h, const std::vector<Index>& items_h, const auto& box_h, Near* near_h,
+                                     Index g, Index h, std::uint8_t edges, std::uint64_t key) {
+      gather(start_g, items_g, g, grown(box(h), rho), box_g, near_g);
+      if (near_g->empty()) return;
+      gather(start_h, items_h, h, grown(box(g), rho), box_h, near_h);
+      for (const auto& [a, a_box] : *near_g) {
+        const spatial::Aabb reach = grown(a_box, rho);
+        for (const auto& [b, b_box] : *near_h) {
+          if (reach.meets(b_box)) consider({a, b, edges, 0, 0, 0, 0, key});
         }
       }
     };
@@ -545,17 +548,11 @@ void SurfaceContact::rebuild(double rho) {
       const auto [g, h] = copy_pairs_[static_cast<std::size_t>(i)];
       if (!grown(box(g), rho).meets(box(h))) continue;
       const std::uint64_t key = copy_pair(group_copy_[g], group_copy_[h]);
-      vertices_against_triangles(g, h, key);
-      vertices_against_triangles(h, g, key);
-      gather(edge_start_, group_edges_, g, grown(box(h), rho), edge_box, &near_edges_g);
-      if (near_edges_g.empty()) continue;
-      gather(edge_start_, group_edges_, h, grown(box(g), rho), edge_box, &near_edges_h);
-      for (const auto& [e, e_box] : near_edges_g) {
-        const spatial::Aabb reach = grown(e_box, rho);
-        for (const auto& [f, f_box] : near_edges_h) {
-          if (reach.meets(f_box)) consider({e, f, 1, 0, 0, 0, 0, key});
-        }
+      for (const auto& [from, to] : {std::pair{g, h}, std::pair{h, g}}) {
+        primitive_pairs(vertex_start_, group_vertices_, vertex_box, &near_vertices, triangle_start_, group_triangles_, triangle_box,
+                        &near_triangles, from, to, 0, key);
       }
+      primitive_pairs(edge_start_, group_edges_, edge_box, &near_edges_g, edge_start_, group_edges_, edge_box, &near_edges_h, g, h, 1, key);
     }
   });
   candidates_.clear();
