@@ -52,12 +52,6 @@ std::uint64_t copy_pair(Index a, Index b) {
   return lo << 32 | hi;
 }
 
-spatial::Aabb grown(spatial::Aabb box, double by) {
-  box.min.array() -= by;
-  box.max.array() += by;
-  return box;
-}
-
 }  // namespace
 
 double barrier(double d, double dhat) {
@@ -193,14 +187,12 @@ void SurfaceContact::set_surface(const MaterialSurface& surface, std::span<const
   vertex_nodes_.resize(V);
   vertex_weights_.resize(V);
   vertex_copy_.resize(V);
+  surface_nodes_.clear();
+  weight_bound_ = 1;
   for (std::size_t v = 0; v < V; ++v) {
     vertex_copy_[v] = surface.vertex_tet[v];
     vertex_nodes_[v] = copy_nodes_[static_cast<std::size_t>(vertex_copy_[v])];
     vertex_weights_[v] = surface.vertex_weights.row(static_cast<Index>(v)).transpose();
-  }
-  surface_nodes_.clear();
-  weight_bound_ = 1;
-  for (std::size_t v = 0; v < V; ++v) {
     surface_nodes_.insert(surface_nodes_.end(), vertex_nodes_[v].begin(), vertex_nodes_[v].end());
     weight_bound_ = std::max(weight_bound_, vertex_weights_[v].cwiseAbs().sum());
   }
@@ -314,9 +306,7 @@ void SurfaceContact::place(const Points& at, Points* y) const {
   y->resize(V, 3);
   for_chunks(V, kNodeChunk, [&](Index begin, Index end, Index) {
     for (Index v = begin; v < end; ++v) {
-      Vec3 p = Vec3::Zero();
-      for (int i = 0; i < 4; ++i) p += vertex_weights_[v][i] * at.row(vertex_nodes_[v][i]).transpose();
-      y->row(v) = p.transpose();
+      y->row(v) = embedded(v, [&](Index n) { return Vec3(at.row(n).transpose()); }).transpose();
     }
   });
 }
@@ -390,11 +380,7 @@ double SurfaceContact::surface_motion(const NodeMotion& node_motion) const {
   // them all: two passes over the vertices, in parallel, nothing placed or allocated. O(V).
   const auto V = static_cast<Index>(vertex_nodes_.size());
   if (V == 0) return 0;
-  const auto motion = [&](Index v) {
-    Vec3 d = Vec3::Zero();
-    for (int i = 0; i < 4; ++i) d += vertex_weights_[v][i] * node_motion(vertex_nodes_[v][i]);
-    return d;
-  };
+  const auto motion = [&](Index v) { return embedded(v, node_motion); };
   const Index chunks = (V + kNodeChunk - 1) / kNodeChunk;
   motion_boxes_.assign(static_cast<std::size_t>(chunks), spatial::Aabb{});
   for_chunks(V, kNodeChunk, [&](Index begin, Index end, Index chunk) {
@@ -534,11 +520,11 @@ void SurfaceContact::rebuild(double rho) {
     const auto primitive_pairs = [&](const std::vector<Index>& start_g, const std::vector<Index>& items_g, const auto& box_g, Near* near_g,
                                      const std::vector<Index>& start_h, const std::vector<Index>& items_h, const auto& box_h, Near* near_h,
                                      Index g, Index h, std::uint8_t edges, std::uint64_t key) {
-      gather(start_g, items_g, g, grown(box(h), rho), box_g, near_g);
+      gather(start_g, items_g, g, box(h).grown(rho), box_g, near_g);
       if (near_g->empty()) return;
-      gather(start_h, items_h, h, grown(box(g), rho), box_h, near_h);
+      gather(start_h, items_h, h, box(g).grown(rho), box_h, near_h);
       for (const auto& [a, a_box] : *near_g) {
-        const spatial::Aabb reach = grown(a_box, rho);
+        const spatial::Aabb reach = a_box.grown(rho);
         for (const auto& [b, b_box] : *near_h) {
           if (reach.meets(b_box)) consider({a, b, edges, 0, 0, 0, 0, key});
         }
@@ -546,7 +532,7 @@ void SurfaceContact::rebuild(double rho) {
     };
     for (Index i = begin; i < end; ++i) {
       const auto [g, h] = copy_pairs_[static_cast<std::size_t>(i)];
-      if (!grown(box(g), rho).meets(box(h))) continue;
+      if (!box(g).grown(rho).meets(box(h))) continue;
       const std::uint64_t key = copy_pair(group_copy_[g], group_copy_[h]);
       for (const auto& [from, to] : {std::pair{g, h}, std::pair{h, g}}) {
         primitive_pairs(vertex_start_, group_vertices_, vertex_box, &near_vertices, triangle_start_, group_triangles_, triangle_box,
@@ -576,7 +562,8 @@ void SurfaceContact::cover_copy_pairs(double rho) {
     copy_tree_ = spatial::BoxTree(copy_boxes_);
     tree_built_ = true;
   } else {
-    copy_tree_.refit(copy_boxes_);
+    copy_tree_.mutable_boxes() = copy_boxes_;  // same count: no allocation
+    copy_tree_.refit();
   }
   // Each pair once (g < h), neighbours left out, sorted: the candidates come in their order.
   tbb::enumerable_thread_specific<std::vector<std::array<Index, 2>>> found;
@@ -644,7 +631,8 @@ double SurfaceContact::max_step(const Points& from, const double* direction) {
   if (!enabled()) return 1;
   // How far any vertex moves over the whole step, relative to the others (see surface_motion).
   const Eigen::Map<const Points> motion(direction, from.rows(), 3);
-  const double sweep = surface_motion([&](Index n) { return Vec3(motion.row(n).transpose()); });
+  const auto node_motion = [&](Index n) { return Vec3(motion.row(n).transpose()); };
+  const double sweep = surface_motion(node_motion);
   if (!(sweep > 0)) return 1;
   cover(from, sweep);
   std::vector<double> smallest(static_cast<std::size_t>((static_cast<Index>(candidates_.size()) + kNodeChunk - 1) / kNodeChunk) + 1, 1.0);
@@ -658,8 +646,7 @@ double SurfaceContact::max_step(const Points& from, const double* direction) {
       Vec3 mean = Vec3::Zero();
       for (int i = 0; i < 4; ++i) {
         y[i] = y_.row(corner[i]).transpose();
-        d[i] = Vec3::Zero();
-        for (int j = 0; j < 4; ++j) d[i] += vertex_weights_[corner[i]][j] * motion.row(vertex_nodes_[corner[i]][j]).transpose();
+        d[i] = embedded(corner[i], node_motion);
         mean += d[i] / 4;
       }
       // A bound of how fast the distance can shrink: the motions relative to their mean.

@@ -203,6 +203,14 @@ class SurfaceContact {
     std::uint8_t sutured;     // rest_close between sutured copies (not counted)
     std::uint64_t copies;     // the copy pair, (min << 32) | max
   };
+  /// Vertex v's share of the nodes' values: sum_i w_i node_value(n_i) over its copy's nodes (its
+  /// position from the nodes' positions, its motion from theirs).
+  template <typename NodeValue>
+  Vec3 embedded(Index v, const NodeValue& node_value) const {
+    Vec3 sum = Vec3::Zero();
+    for (int i = 0; i < 4; ++i) sum += vertex_weights_[v][i] * node_value(vertex_nodes_[v][i]);
+    return sum;
+  }
   void place(const Points& at, Points* y) const;
   /// Makes the candidates cover positions `at` and motions of up to `sweep` from there.
   void cover(const Points& at, double sweep);

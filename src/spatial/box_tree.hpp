@@ -24,6 +24,13 @@ struct Aabb {
     max = max.cwiseMax(b.max);
   }
   bool meets(const Aabb& b) const { return (min.array() <= b.max.array()).all() && (b.min.array() <= max.array()).all(); }
+  /// The box grown by `by` on every side: it meets another box when the two come within `by`.
+  Aabb grown(double by) const {
+    Aabb out = *this;
+    out.min.array() -= by;
+    out.max.array() += by;
+    return out;
+  }
 };
 
 class BoxTree {
@@ -59,17 +66,12 @@ class BoxTree {
  private:
   // Below this depth the traversal forks into parallel tasks.
   static constexpr int kParallelDepth = 6;
-  static Aabb grown(Aabb box, double by) {
-    box.min.array() -= by;
-    box.max.array() += by;
-    return box;
-  }
   template <typename Visit>
   void join_within(Index node, double distance, const Visit& visit, int depth) const {
     const Node& n = nodes_[node];
     if (n.count > 0) {
       for (Index a = n.first; a < n.first + n.count; ++a) {
-        const Aabb reach = grown(boxes_[items_[a]], distance);
+        const Aabb reach = boxes_[items_[a]].grown(distance);
         for (Index b = a + 1; b < n.first + n.count; ++b) {
           if (reach.meets(boxes_[items_[b]])) visit(items_[a], items_[b]);
         }
@@ -90,10 +92,10 @@ class BoxTree {
   void join_between(Index p, Index q, double distance, const Visit& visit, int depth) const {
     const Node& a = nodes_[p];
     const Node& b = nodes_[q];
-    if (!grown(a.box, distance).meets(b.box)) return;
+    if (!a.box.grown(distance).meets(b.box)) return;
     if (a.count > 0 && b.count > 0) {
       for (Index i = a.first; i < a.first + a.count; ++i) {
-        const Aabb reach = grown(boxes_[items_[i]], distance);
+        const Aabb reach = boxes_[items_[i]].grown(distance);
         for (Index j = b.first; j < b.first + b.count; ++j) {
           if (reach.meets(boxes_[items_[j]])) visit(items_[i], items_[j]);
         }

@@ -25,17 +25,11 @@ std::vector<Aabb> random_boxes(int count, unsigned seed) {
   return boxes;
 }
 
-Aabb grown(Aabb box, double by) {
-  box.min.array() -= by;
-  box.max.array() += by;
-  return box;
-}
-
 TEST(BoxTree, QueryFindsEveryBoxThatMeetsInOrder) {
   const std::vector<Aabb> boxes = random_boxes(500, 1);
   const BoxTree tree(boxes);
   for (std::size_t q = 0; q < 50; ++q) {
-    const Aabb query = grown(boxes[q], 0.02);
+    const Aabb query = boxes[q].grown(0.02);
     std::vector<Index> found, expected;
     tree.query(query, &found);
     for (std::size_t i = 0; i < boxes.size(); ++i) {
@@ -68,7 +62,7 @@ TEST(BoxTree, SelfJoinFindsEveryPairWithinTheDistanceOnce) {
       std::sort(joined.begin(), joined.end());
       for (std::size_t i = 0; i < boxes.size(); ++i) {
         std::vector<Index> hits;
-        tree.query(grown(boxes[i], distance), &hits);
+        tree.query(boxes[i].grown(distance), &hits);
         for (const Index j : hits) {
           if (j > static_cast<Index>(i)) expected.push_back({static_cast<Index>(i), j});
         }
