@@ -1,8 +1,12 @@
 // What surface contact (self_collision) adds to a step: the same scene run twice through the
 // live session, without and with contact of the material surface, printing the median and 99th
 // percentile of consecutive steps' wall times, the surface's size, the contact pairs and the
-// time in continuous collision detection. Default: examples/live-femur.json (the CT femur from
-// libcgal-demo embedded in an 11k-tet lattice, hanging under gravity, the real-time solver).
+// time in continuous collision detection, and where a step's time goes. Default:
+// examples/live-femur.json (the CT femur from libcgal-demo embedded in an 11k-tet lattice,
+// hanging under gravity, the real-time solver: nothing comes near). With contact at work:
+// bench/scenes/hand-sliced.json (libcgal-demo's hand in an 11k-tet lattice, 43k surface
+// triangles, cut by a slanted plane; the upper part slides down the cut, thousands of pairs
+// within the thickness).
 //
 // Usage: tetcut_bench_contact [SCENE] [STEPS]
 
@@ -21,24 +25,34 @@ int main(int argc, char** argv) {
   const int steps = argc > 2 ? std::atoi(argv[2]) : 60;
   Scene scene = load_scene(path);
   std::printf("scene %s, %d steps from rest\n", path.c_str(), steps);
-  std::printf("%-16s %8s %8s %10s %10s %12s %10s %10s %12s %10s\n", "self_collision", "tets", "surface", "median ms", "p99 ms",
-              "contact pairs", "ccd ms", "rebuilds", "copy pairs", "candidates");
+  std::printf("%-16s %8s %8s %10s %10s %12s %10s %10s %12s %10s %8s %8s %11s %9s %10s\n", "self_collision", "tets", "surface",
+              "median ms", "p99 ms", "contact pairs", "ccd ms", "rebuilds", "copy pairs", "candidates", "newton", "cg",
+              "assemble ms", "solve ms", "search ms");
   for (const bool on : {false, true}) {
     scene.self_collision = on;
     Session session(scene);
     std::vector<double> ms;
     Index pairs = 0;
     double ccd = 0;
+    // Per step, over the steps: where a step's time goes (contact's energies and matrices are
+    // in assemble and search, its CCD in ccd).
+    double newton = 0, cg = 0, assemble = 0, solve = 0, search = 0;
     for (int s = 0; s < steps; ++s) {
       const bench::Clock::time_point start = bench::Clock::now();
       const SessionStep step = session.advance();
       ms.push_back(bench::ms_since(start));
       pairs = std::max(pairs, step.report.contact_pairs);
       ccd += 1e3 * step.report.contact_seconds;
+      newton += step.report.newton_iterations;
+      cg += step.report.cg_iterations;
+      assemble += 1e3 * step.report.assemble_seconds;
+      solve += 1e3 * step.report.solve_seconds;
+      search += 1e3 * step.report.line_search_seconds;
     }
     const sim::Simulator::SurfaceContactState contact = session.simulator().surface_contact();
-    std::printf("%-16s %8d %8d %10.2f %10.2f %12d %10.2f %10d %12d %10d\n", on ? "on" : "off", session.simulator().num_tets(),
-                session.surface().surface.num_triangles(), bench::median(ms), bench::percentile(ms, 0.99), pairs, ccd / steps,
-                contact.rebuilds, contact.copy_pair_rebuilds, contact.candidates);
+    std::printf("%-16s %8d %8d %10.2f %10.2f %12d %10.2f %10d %12d %10d %8.2f %8.1f %11.2f %9.2f %10.2f\n", on ? "on" : "off",
+                session.simulator().num_tets(), session.surface().surface.num_triangles(), bench::median(ms),
+                bench::percentile(ms, 0.99), pairs, ccd / steps, contact.rebuilds, contact.copy_pair_rebuilds, contact.candidates,
+                newton / steps, cg / steps, assemble / steps, solve / steps, search / steps);
   }
 }

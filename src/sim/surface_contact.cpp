@@ -8,6 +8,7 @@
 
 #include <tbb/enumerable_thread_specific.h>
 
+
 #include <algorithm>
 #include <cmath>
 
@@ -46,6 +47,23 @@ Vec3 unit_normal(const Vec3& a, const Vec3& b, const Vec3& c, double length) {
 // A guard's vertex faces its triangle when one of its triangles' normals makes an angle of more
 // than 120 degrees with the triangle's in the material (the two sides of a cut: 180).
 constexpr double kFacing = 0.5;
+
+// A lower bound of the distance between a pair's two primitives (the vertex, or the first edge,
+// against the rest): how far apart their boxes are along the axis that separates them most.
+// About a tenth of an exact distance's cost, and most listed pairs are farther apart than the
+// thickness (on a hand cut in two, sliding: 5k of 29k within it), so the exact distance is taken
+// only where this cannot decide.
+double gap_between(const std::array<Vec3, 4>& y, bool edges) {
+  const int split = edges ? 2 : 1;
+  double gap = 0;
+  for (int k = 0; k < 3; ++k) {
+    double lo_a = y[0][k], hi_a = y[0][k], lo_b = y[split][k], hi_b = y[split][k];
+    for (int i = 1; i < split; ++i) lo_a = std::min(lo_a, y[i][k]), hi_a = std::max(hi_a, y[i][k]);
+    for (int i = split + 1; i < 4; ++i) lo_b = std::min(lo_b, y[i][k]), hi_b = std::max(hi_b, y[i][k]);
+    gap = std::max({gap, lo_b - hi_a, lo_a - hi_b});
+  }
+  return gap;
+}
 
 std::uint64_t copy_pair(Index a, Index b) {
   const auto lo = static_cast<std::uint64_t>(std::min(a, b)), hi = static_cast<std::uint64_t>(std::max(a, b));
@@ -321,10 +339,16 @@ std::array<Index, 4> SurfaceContact::corners(const Candidate& c) const {
   return {c.a, t[0], t[1], t[2]};
 }
 
-collision::Proximity SurfaceContact::proximity(const Candidate& c, const Points& y) const {
+std::array<Vec3, 4> SurfaceContact::corner_positions(const Candidate& c, const Points& y) const {
   const std::array<Index, 4> k = corners(c);
-  const auto at = [&](int i) -> Vec3 { return y.row(k[i]).transpose(); };
-  return c.edges ? collision::segment_segment(at(0), at(1), at(2), at(3)) : collision::point_triangle(at(0), at(1), at(2), at(3));
+  std::array<Vec3, 4> at;
+  for (int i = 0; i < 4; ++i) at[i] = y.row(k[i]).transpose();
+  return at;
+}
+
+collision::Proximity SurfaceContact::proximity(const Candidate& c, const Points& y) const {
+  const std::array<Vec3, 4> at = corner_positions(c, y);
+  return c.edges ? collision::segment_segment(at[0], at[1], at[2], at[3]) : collision::point_triangle(at[0], at[1], at[2], at[3]);
 }
 
 ContactTerm SurfaceContact::term(const Candidate& c, const collision::Proximity& p) const {
@@ -365,7 +389,9 @@ void SurfaceContact::measure(Measure which) {
                         : which == Measure::kJoined               ? !c.joined
                         : which == Measure::kJoinedVertexTriangle ? (!c.joined || c.edges)
                                                                   : false;
-      if (skip) {
+      // Every reader asks only whether a pair is within the thickness: those surely beyond it
+      // are left at infinity unmeasured.
+      if (skip || !(gap_between(corner_positions(c, y_), c.edges) < settings_.thickness)) {
         proximities_[k].distance = std::numeric_limits<double>::infinity();
       } else {
         proximities_[k] = proximity(c, y_);
@@ -662,6 +688,8 @@ double SurfaceContact::max_step(const Points& from, const double* direction) {
         }
       }
       const double bound = bound_a + bound_b;
+      // The gap of their boxes bounds the distance from below: beyond reach by it, beyond reach.
+      if (bound > 0 && gap_between(y, c.edges) - bound > 0) continue;
       const auto distance_at = [&](double t) {
         const auto p = [&](int i) -> Vec3 { return y[i] + t * d[i]; };
         return (c.edges ? collision::segment_segment(p(0), p(1), p(2), p(3)) : collision::point_triangle(p(0), p(1), p(2), p(3))).distance;

@@ -240,6 +240,8 @@ class SurfaceContact {
   enum class Measure { kAll, kCounted, kJoined, kJoinedVertexTriangle };
   void measure(Measure which = Measure::kAll);
   collision::Proximity proximity(const Candidate& c, const Points& y) const;
+  /// The pair's four corners at vertex positions y (the vertex or first edge first).
+  std::array<Vec3, 4> corner_positions(const Candidate& c, const Points& y) const;
   std::array<Index, 4> corners(const Candidate& c) const;
   ContactTerm term(const Candidate& c, const collision::Proximity& p) const;
   bool neighbours(Index copy_a, Index copy_b) const;
