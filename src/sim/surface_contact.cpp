@@ -346,6 +346,42 @@ std::array<Vec3, 4> SurfaceContact::corner_positions(const Candidate& c, const P
   return at;
 }
 
+bool SurfaceContact::across_one_cut(const Candidate& c) const {
+  // A triangle of the second primitive (the triangle itself, or one around an end of the second
+  // edge) in whose plane all four corners lie in the material, within the allowance, and a
+  // triangle around the first primitive's corners turned against it: the other side of the cut.
+  const std::array<Index, 4> k = corners(c);
+  const double delta = guard_allowance();
+  const auto in_plane_of = [&](Index t) {
+    const Vec3& n = rest_normals_[static_cast<std::size_t>(t)];
+    if (n.isZero()) return false;
+    const Vec3 on = rest_y_.row(triangles_[static_cast<std::size_t>(t)][0]).transpose();
+    for (const Index v : k) {
+      if (!(std::abs(n.dot(rest_y_.row(v).transpose() - on)) < delta)) return false;
+    }
+    return true;
+  };
+  const auto faced_by_first = [&](Index t) {
+    const Vec3& n = rest_normals_[static_cast<std::size_t>(t)];
+    for (int corner = 0; corner < (c.edges ? 2 : 1); ++corner) {
+      const auto v = static_cast<std::size_t>(k[corner]);
+      for (Index i = vertex_triangle_start_[v]; i < vertex_triangle_start_[v + 1]; ++i) {
+        if (rest_normals_[static_cast<std::size_t>(vertex_triangles_[i])].dot(n) < -kFacing) return true;
+      }
+    }
+    return false;
+  };
+  if (!c.edges) return in_plane_of(c.b) && faced_by_first(c.b);
+  for (int corner = 2; corner < 4; ++corner) {
+    const auto v = static_cast<std::size_t>(k[corner]);
+    for (Index i = vertex_triangle_start_[v]; i < vertex_triangle_start_[v + 1]; ++i) {
+      const Index t = vertex_triangles_[i];
+      if (in_plane_of(t) && faced_by_first(t)) return true;
+    }
+  }
+  return false;
+}
+
 collision::Proximity SurfaceContact::proximity(const Candidate& c, const Points& y) const {
   const std::array<Vec3, 4> at = corner_positions(c, y);
   return c.edges ? collision::segment_segment(at[0], at[1], at[2], at[3]) : collision::point_triangle(at[0], at[1], at[2], at[3]);
@@ -511,7 +547,7 @@ void SurfaceContact::rebuild(double rho) {
       // barrier is infinite at distance 0), as the joins of surfaces touching from the start are.
       const double rest = proximity(c, rest_y_).distance;
       c.rest_close = rest < settings_.thickness || !(now > 0) ? 1 : 0;
-      c.rest_touching = rest < guard_allowance() || !(now > 0) ? 1 : 0;
+      c.rest_touching = rest < guard_allowance() || !(now > 0) || (c.rest_close && across_one_cut(c)) ? 1 : 0;
       out.push_back(c);
     };
     // The primitives of one copy that reach another's box, with their boxes: most pairs of nearby

@@ -25,7 +25,11 @@
 // surfaces meet by construction). Excluded for a while: pairs of copies "joined across a cut",
 // whose surfaces a cut has just made coincide (both sides of a fresh cut are at distance 0, where
 // the barrier is infinite), that touched in the material (within the guards' allowance delta, below;
-// or touched when the list was built); the other pairs of joined copies, apart when the cut was
+// or touched when the list was built), or lay there on the two sides of one cut, apart along it by
+// less than dhat (all four corners within delta of the plane of a triangle of one primitive, which
+// a triangle of the other faces: the two sides' triangulations of one cut surface, whose vertices
+// the guards hold to it; counted, their barrier pushed the sides along the cut from the start, and
+// the slinky had 645k such pairs active at rest); the other pairs of joined copies, apart when the cut was
 // made, count as any others (sticks sliding along each other while their cut faces still touch
 // elsewhere, and faces of neighbouring sticks a sliver apart in the material: their barrier is
 // finite there and starts active). When the surface is set after a cut, a pair of copies becomes joined
@@ -199,7 +203,8 @@ class SurfaceContact {
     std::uint8_t edges;    // 0: vertex-triangle, 1: edge-edge
     std::uint8_t joined;      // of copies joined across a cut and rest_touching (not counted)
     std::uint8_t rest_close;  // within dhat in the material
-    std::uint8_t rest_touching;  // within the guards' allowance in the material, or touching now
+    std::uint8_t rest_touching;  // within the guards' allowance in the material, or touching now, or
+                                 // within dhat there on the two sides of one cut (across_one_cut)
     std::uint8_t sutured;     // rest_close between sutured copies (not counted)
     std::uint64_t copies;     // the copy pair, (min << 32) | max
   };
@@ -240,6 +245,10 @@ class SurfaceContact {
   enum class Measure { kAll, kCounted, kJoined, kJoinedVertexTriangle };
   void measure(Measure which = Measure::kAll);
   collision::Proximity proximity(const Candidate& c, const Points& y) const;
+  /// Whether a pair lies on the two sides of one cut in the material: all four corners within the
+  /// guards' allowance of the plane of a triangle of the second primitive, which a triangle of
+  /// the first faces (turned more than 120 degrees against it). O(triangles around its corners).
+  bool across_one_cut(const Candidate& c) const;
   /// The pair's four corners at vertex positions y (the vertex or first edge first).
   std::array<Vec3, 4> corner_positions(const Candidate& c, const Points& y) const;
   std::array<Index, 4> corners(const Candidate& c) const;

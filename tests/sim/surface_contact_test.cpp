@@ -307,6 +307,32 @@ TEST(SurfaceContact, HalvesOfAFreshCutDrivenIntoEachOtherDoNotPassThrough) {
   EXPECT_GT(right_reach - left_reach, 0.05);
 }
 
+// A tube-shaped crack inside a block (a cylinder's side, wholly in the material, so that no rim
+// meets the outer surface): where a side's polygons are fanned into slivers, a vertex lies within
+// the thickness of triangles of the other side that it does not touch. Those pairs lie on the two
+// sides of one cut in the material: left out with the touching ones (the guards hold the sides
+// together), not pushing the sides along the cut from the start. Before, such pairs were counted,
+// with their barrier active at rest: an energy of 409 here (645k pairs on the slinky). What is
+// left, 0.03, comes from a few pairs the plane test does not take (within the thickness but more
+// than the allowance off each other's planes: not yet known which).
+TEST(SurfaceContact, TheSidesOfACurvedCutDoNotPushEachOtherAtRest) {
+  Cutter cutter(make_grid({Vec3(0, 0, 0), Vec3(1, 1, 1)}, {4, 4, 4}, 5));
+  cutter.cut(cylinder_side(Vec3(0.5, 0.5, 0.5), Vec3(0, 0, 1), 0.31, 0.5, 192));
+  const CutResult result = cutter.result();
+  ASSERT_EQ(result.mesh.num_pieces(), 1);
+  sim::Simulator sim(result.mesh.mesh, soft(), result.mesh.material_fractions());
+  sim.set_contact_surface(result.surface);
+  EXPECT_GT(sim.surface_contact().joined_copy_pairs, 0);
+  EXPECT_LT(sim.surface_contact_energy(), 1.0);
+  // Falling under gravity, the crack's sides stay together.
+  sim::StepOptions options;
+  options.dt = 0.01;
+  for (int step = 0; step < 10; ++step) {
+    EXPECT_TRUE(sim.step(options).converged) << "step " << step;
+    ASSERT_EQ(crossings(result.surface, cutter.tet_nodes(), sim), 0) << "step " << step;
+  }
+}
+
 TEST(SurfaceContact, FrictionGradientAndHessianMatchFiniteDifferences) {
   const Vec3 n = Vec3(0.2, -0.3, 1).normalized();
   const double eps = 1e-3, mu = 0.4, force = 30;
