@@ -347,8 +347,8 @@ std::array<Vec3, 4> SurfaceContact::corner_positions(const Candidate& c, const P
 }
 
 bool SurfaceContact::across_one_cut(const Candidate& c) const {
-  // A triangle of the second primitive (the triangle itself, or one around an end of the second
-  // edge) in whose plane all four corners lie in the material, within the allowance, and a
+  // A triangle of the second primitive, or one around its corners, in whose plane all four
+  // corners lie in the material, within the allowance, and a
   // triangle around the first primitive's corners turned against it: the other side of the cut.
   const std::array<Index, 4> k = corners(c);
   const double delta = guard_allowance();
@@ -371,8 +371,10 @@ bool SurfaceContact::across_one_cut(const Candidate& c) const {
     }
     return false;
   };
-  if (!c.edges) return in_plane_of(c.b) && faced_by_first(c.b);
-  for (int corner = 2; corner < 4; ++corner) {
+  if (!c.edges && in_plane_of(c.b) && faced_by_first(c.b)) return true;
+  // Around the second primitive's corners: a flat triangle (a fan over collinear points) has no
+  // plane of its own, its neighbours do.
+  for (int corner = c.edges ? 2 : 1; corner < 4; ++corner) {
     const auto v = static_cast<std::size_t>(k[corner]);
     for (Index i = vertex_triangle_start_[v]; i < vertex_triangle_start_[v + 1]; ++i) {
       const Index t = vertex_triangles_[i];

@@ -246,8 +246,9 @@ class SurfaceContact {
   void measure(Measure which = Measure::kAll);
   collision::Proximity proximity(const Candidate& c, const Points& y) const;
   /// Whether a pair lies on the two sides of one cut in the material: all four corners within the
-  /// guards' allowance of the plane of a triangle of the second primitive, which a triangle of
-  /// the first faces (turned more than 120 degrees against it). O(triangles around its corners).
+  /// guards' allowance of the plane of the second primitive's triangle or of one around its
+  /// corners, which a triangle of the first faces (turned more than 120 degrees against it).
+  /// O(triangles around its corners).
   bool across_one_cut(const Candidate& c) const;
   /// The pair's four corners at vertex positions y (the vertex or first edge first).
   std::array<Vec3, 4> corner_positions(const Candidate& c, const Points& y) const;
