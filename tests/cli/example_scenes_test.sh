@@ -39,9 +39,11 @@ json_check blade/summary.json 'j["cuts_applied"] == 2 and j["skipped_coplanar"] 
 # junction's points rounded differently from each side), tilted, dropped on the ground, piling
 # with self-collision (on the ground: the box of the tet copies, which reach beyond the material,
 # within 5 cm below it): the sides of the cuts press into each other at the ground but no surface
-# triangles cross (more deeply than the guards allow).
+# triangles cross (more deeply than the guards allow). They fell: their top started at about 1.9
+# (at 0.8 s it is 1.26, the sticks fallen apart and one still leaning; 1.16 while the pairs of the
+# cuts' two sides that were apart along them pushed from the start and the sticks stood together).
 expect_exit 0 "$TETCUT" sim "$DATA/scenes/four_sticks.json" -o sticks --check-intersections
-json_check sticks/summary.json 'j["pieces"] == 4 and j["max_intersecting_pairs"] == 0 and j["final_box"][5] < 1.2 and j["final_box"][2] > -0.05'
+json_check sticks/summary.json 'j["pieces"] == 4 and j["max_intersecting_pairs"] == 0 and j["final_box"][5] < 1.4 and j["final_box"][2] > -0.05'
 
 # A flap cut into a slab, folded back onto the tissue by three hooks (issue 16's folded flap):
 # it must come to lie on the slab's top (its box reaches above the slab) without passing into it,
