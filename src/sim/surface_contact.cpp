@@ -8,7 +8,6 @@
 
 #include <tbb/enumerable_thread_specific.h>
 
-
 #include <algorithm>
 #include <cmath>
 
@@ -347,9 +346,11 @@ std::array<Vec3, 4> SurfaceContact::corner_positions(const Candidate& c, const P
 }
 
 bool SurfaceContact::across_one_cut(const Candidate& c) const {
-  // A triangle of the second primitive, or one around its corners, in whose plane all four
-  // corners lie in the material, within the allowance, and a
-  // triangle around the first primitive's corners turned against it: the other side of the cut.
+  // A triangle around the second primitive's corners (its own, for a triangle) in whose plane
+  // all four corners lie in the material, within the allowance, and a triangle around the first
+  // primitive's corners turned against it: the other side of the cut. Around the corners, not
+  // only the primitive's own: a flat triangle (a fan over collinear points) has no plane, its
+  // neighbours do.
   const std::array<Index, 4> k = corners(c);
   const double delta = guard_allowance();
   const auto in_plane_of = [&](Index t) {
@@ -371,9 +372,6 @@ bool SurfaceContact::across_one_cut(const Candidate& c) const {
     }
     return false;
   };
-  if (!c.edges && in_plane_of(c.b) && faced_by_first(c.b)) return true;
-  // Around the second primitive's corners: a flat triangle (a fan over collinear points) has no
-  // plane of its own, its neighbours do.
   for (int corner = c.edges ? 2 : 1; corner < 4; ++corner) {
     const auto v = static_cast<std::size_t>(k[corner]);
     for (Index i = vertex_triangle_start_[v]; i < vertex_triangle_start_[v + 1]; ++i) {

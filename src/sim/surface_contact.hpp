@@ -28,8 +28,8 @@
 // or touched when the list was built), or lay there on the two sides of one cut, apart along it by
 // less than dhat (all four corners within delta of the plane of a triangle of one primitive, which
 // a triangle of the other faces: the two sides' triangulations of one cut surface, whose vertices
-// the guards hold to it; counted, their barrier pushed the sides along the cut from the start, and
-// the slinky had 645k such pairs active at rest); the other pairs of joined copies, apart when the cut was
+// the guards hold to it; counted, their barrier pushed the sides along the cut from the start: most
+// of the slinky's 645k pairs active at rest); the other pairs of joined copies, apart when the cut was
 // made, count as any others (sticks sliding along each other while their cut faces still touch
 // elsewhere, and faces of neighbouring sticks a sliver apart in the material: their barrier is
 // finite there and starts active). When the surface is set after a cut, a pair of copies becomes joined
