@@ -64,6 +64,11 @@ double gap_between(const std::array<Vec3, 4>& y, bool edges) {
   return gap;
 }
 
+// The proximity of a pair at its corner positions (vertex and triangle, or two segments).
+collision::Proximity proximity_at(const std::array<Vec3, 4>& y, bool edges) {
+  return edges ? collision::segment_segment(y[0], y[1], y[2], y[3]) : collision::point_triangle(y[0], y[1], y[2], y[3]);
+}
+
 std::uint64_t copy_pair(Index a, Index b) {
   const auto lo = static_cast<std::uint64_t>(std::min(a, b)), hi = static_cast<std::uint64_t>(std::max(a, b));
   return lo << 32 | hi;
@@ -90,7 +95,7 @@ double barrier_second(double d, double dhat) {
 
 double pair_energy(const std::array<Vec3, 4>& y, bool edges, double dhat, double kappa, collision::Vec12* gradient,
                    collision::Mat12* hessian) {
-  const collision::Proximity p = edges ? collision::segment_segment(y[0], y[1], y[2], y[3]) : collision::point_triangle(y[0], y[1], y[2], y[3]);
+  const collision::Proximity p = proximity_at(y, edges);
   const double d = p.distance;
   const bool active = d < dhat && d > 0;
   if (gradient) *gradient = active ? collision::Vec12(kappa * barrier_first(d, dhat) * collision::distance_gradient(p)) : collision::Vec12::Zero();
@@ -345,6 +350,13 @@ std::array<Vec3, 4> SurfaceContact::corner_positions(const Candidate& c, const P
   return at;
 }
 
+bool SurfaceContact::vertex_faces(Index v, const Vec3& normal) const {
+  for (Index i = vertex_triangle_start_[v]; i < vertex_triangle_start_[v + 1]; ++i) {
+    if (rest_normals_[static_cast<std::size_t>(vertex_triangles_[i])].dot(normal) < -kFacing) return true;
+  }
+  return false;
+}
+
 bool SurfaceContact::across_one_cut(const Candidate& c) const {
   // A triangle around the second primitive's corners (its own, for a triangle) in whose plane
   // all four corners lie in the material, within the allowance, and a triangle around the first
@@ -364,13 +376,7 @@ bool SurfaceContact::across_one_cut(const Candidate& c) const {
   };
   const auto faced_by_first = [&](Index t) {
     const Vec3& n = rest_normals_[static_cast<std::size_t>(t)];
-    for (int corner = 0; corner < (c.edges ? 2 : 1); ++corner) {
-      const auto v = static_cast<std::size_t>(k[corner]);
-      for (Index i = vertex_triangle_start_[v]; i < vertex_triangle_start_[v + 1]; ++i) {
-        if (rest_normals_[static_cast<std::size_t>(vertex_triangles_[i])].dot(n) < -kFacing) return true;
-      }
-    }
-    return false;
+    return vertex_faces(k[0], n) || (c.edges && vertex_faces(k[1], n));
   };
   for (int corner = c.edges ? 2 : 1; corner < 4; ++corner) {
     const auto v = static_cast<std::size_t>(k[corner]);
@@ -382,10 +388,7 @@ bool SurfaceContact::across_one_cut(const Candidate& c) const {
   return false;
 }
 
-collision::Proximity SurfaceContact::proximity(const Candidate& c, const Points& y) const {
-  const std::array<Vec3, 4> at = corner_positions(c, y);
-  return c.edges ? collision::segment_segment(at[0], at[1], at[2], at[3]) : collision::point_triangle(at[0], at[1], at[2], at[3]);
-}
+collision::Proximity SurfaceContact::proximity(const Candidate& c, const Points& y) const { return proximity_at(corner_positions(c, y), c.edges); }
 
 ContactTerm SurfaceContact::term(const Candidate& c, const collision::Proximity& p) const {
   ContactTerm t;
@@ -427,10 +430,15 @@ void SurfaceContact::measure(Measure which) {
                                                                   : false;
       // Every reader asks only whether a pair is within the thickness: those surely beyond it
       // are left at infinity unmeasured.
-      if (skip || !(gap_between(corner_positions(c, y_), c.edges) < settings_.thickness)) {
+      if (skip) {
         proximities_[k].distance = std::numeric_limits<double>::infinity();
+        continue;
+      }
+      const std::array<Vec3, 4> at = corner_positions(c, y_);
+      if (gap_between(at, c.edges) < settings_.thickness) {
+        proximities_[k] = proximity_at(at, c.edges);
       } else {
-        proximities_[k] = proximity(c, y_);
+        proximities_[k].distance = std::numeric_limits<double>::infinity();
       }
     }
   });
@@ -728,7 +736,7 @@ double SurfaceContact::max_step(const Points& from, const double* direction) {
       if (bound > 0 && gap_between(y, c.edges) - bound > 0) continue;
       const auto distance_at = [&](double t) {
         const auto p = [&](int i) -> Vec3 { return y[i] + t * d[i]; };
-        return (c.edges ? collision::segment_segment(p(0), p(1), p(2), p(3)) : collision::point_triangle(p(0), p(1), p(2), p(3))).distance;
+        return proximity_at({p(0), p(1), p(2), p(3)}, c.edges).distance;
       };
       const double start = distance_at(0);
       if (!(bound > 0) || start - bound > 0) continue;  // cannot come within reach this step
@@ -792,12 +800,7 @@ void SurfaceContact::lag_guards(const Points& start) {
     // (one of the vertex's triangles turned against the triangle's), not a neighbour of the
     // triangle on its own side, which may lie beside it and below its plane.
     const Vec3& facing = rest_normals_[static_cast<std::size_t>(c.b)];
-    if (facing.isZero()) continue;
-    bool faces = false;
-    for (Index i = vertex_triangle_start_[corner[0]]; i < vertex_triangle_start_[corner[0] + 1] && !faces; ++i) {
-      faces = rest_normals_[static_cast<std::size_t>(vertex_triangles_[i])].dot(facing) < -kFacing;
-    }
-    if (!faces) continue;
+    if (facing.isZero() || !vertex_faces(corner[0], facing)) continue;
     const Vec3 normal = unit_normal(a, b, q, dhat);  // outward: the triangle's material is behind it
     if (normal.isZero()) continue;
     const Vec3 cross = (b - a).cross(q - a);

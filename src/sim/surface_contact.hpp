@@ -250,6 +250,9 @@ class SurfaceContact {
   /// corners, which a triangle of the first faces (turned more than 120 degrees against it).
   /// O(triangles around its corners).
   bool across_one_cut(const Candidate& c) const;
+  /// Whether one of vertex v's triangles is turned more than 120 degrees against `normal` in the
+  /// material (v on the other side of a cut from a triangle with that normal).
+  bool vertex_faces(Index v, const Vec3& normal) const;
   /// The pair's four corners at vertex positions y (the vertex or first edge first).
   std::array<Vec3, 4> corner_positions(const Candidate& c, const Points& y) const;
   std::array<Index, 4> corners(const Candidate& c) const;
