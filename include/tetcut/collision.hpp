@@ -45,7 +45,9 @@ struct SurfaceIntersections {
 ///   of rest points, 64 ulps as above: surface contact leaves pairs within its allowance in the
 ///   material out of its barrier, as touching) and now cross by at most `opened` (one reaches no further than
 ///   that behind the other, the material being behind each: the sides of a cut pressed
-///   together, which slide along each other as each bulges). So the two sides of a fresh cut,
+///   together, which slide along each other as each bulges; or, where they are not coplanar,
+///   the segment where they cross lies within `opened` of both triangles' rims: a face that meets
+///   a cut at a rim, the side of a neighbour pressed into it there). So the two sides of a fresh cut,
 ///   which coincide, are not counted, and are as soon as they have moved apart and cross, or
 ///   pressed together, go into each other by more than `opened`. A simulation with surface
 ///   contact passes the fresh-cut allowance of its guards (a hundredth of an edge; see

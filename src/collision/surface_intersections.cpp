@@ -48,6 +48,80 @@ double reach_behind(const std::array<Vec3, 3>& a, const std::array<Vec3, 3>& b) 
   return deepest;
 }
 
+// How far from their rims two triangles cross: the largest distance from either triangle's rim of
+// a point of the segment where they cross. Two sides of a cut pressed together by d where a third
+// face meets them (a stick's top face and its neighbour's side, which touch along a rim in the
+// material) cross in a strip about d wide along both rims, while either reaches a whole triangle
+// behind the other (reach_behind measures the part over the other, not the overlap): this is
+// about d there; one passing through the other, or a rim pushed over a face well inside it, is
+// the size of the overlap. Inside a convex polygon the distance to its rim is the least distance
+// to its sides' lines: along the segment, per triangle, the least of three affine functions,
+// concave, so its largest value is at an end or where two of them meet. Infinity where the
+// triangles are too near coplanar for a segment (an angle below 1e-3: reach_behind decides those),
+// 0 where they do not cross. Floating point: a depth.
+double crossing_depth(const std::array<Vec3, 3>& a, const std::array<Vec3, 3>& b) {
+  const Vec3 na = (a[1] - a[0]).cross(a[2] - a[0]), nb = (b[1] - b[0]).cross(b[2] - b[0]);
+  constexpr double kCoplanar = 1e-3;
+  if (!(na.cross(nb).norm() > kCoplanar * na.norm() * nb.norm())) return std::numeric_limits<double>::infinity();
+  const Vec3 ub = nb.normalized();
+  // Where a meets b's plane: the ends of the segment, from a's edges whose ends lie on either side.
+  std::array<double, 3> side{};
+  for (int k = 0; k < 3; ++k) side[k] = ub.dot(a[k] - b[0]);
+  std::array<Vec3, 3> ends;
+  int count = 0;
+  for (int k = 0; k < 3; ++k) {
+    const double s0 = side[k], s1 = side[(k + 1) % 3];
+    if (s0 == 0) ends[count++] = a[k];
+    if ((s0 < 0 && s1 > 0) || (s0 > 0 && s1 < 0)) ends[count++] = a[k] + (a[(k + 1) % 3] - a[k]) * (s0 / (s0 - s1));
+  }
+  if (count < 2) return 0;  // at most a corner on b's plane
+  const Vec3 p = ends[0], q = ends[1];
+  // The rims' lines as inward unit normals in each triangle's plane: distance = m . (x - corner).
+  std::array<Vec3, 6> inward;
+  std::array<Vec3, 6> on;
+  const Vec3 ua = na.normalized();
+  for (int e = 0; e < 3; ++e) {
+    inward[e] = ua.cross(a[(e + 1) % 3] - a[e]).normalized();
+    on[e] = a[e];
+    inward[3 + e] = ub.cross(b[(e + 1) % 3] - b[e]).normalized();
+    on[3 + e] = b[e];
+  }
+  // f_i(s) = c_i + s g_i along x(s) = p + s (q - p) (a's sides, then b's); the part of [0, 1]
+  // inside b (f_3..5 >= 0; the segment is a's already).
+  std::array<double, 6> c{}, g{};
+  double lo = 0, hi = 1;
+  for (int i = 0; i < 6; ++i) {
+    c[i] = inward[i].dot(p - on[i]);
+    g[i] = inward[i].dot(q - p);
+    if (i < 3) continue;
+    if (g[i] == 0) {
+      if (c[i] < 0) return 0;
+    } else if (g[i] > 0) {
+      lo = std::max(lo, -c[i] / g[i]);
+    } else {
+      hi = std::min(hi, -c[i] / g[i]);
+    }
+  }
+  if (!(lo <= hi)) return 0;
+  double deepest = 0;
+  for (const int first : {0, 3}) {
+    const auto inside_by = [&](double s) {
+      double d = std::numeric_limits<double>::infinity();
+      for (int i = first; i < first + 3; ++i) d = std::min(d, c[i] + s * g[i]);
+      return d;
+    };
+    deepest = std::max({deepest, inside_by(lo), inside_by(hi)});
+    for (int i = first; i < first + 3; ++i) {
+      for (int j = i + 1; j < first + 3; ++j) {
+        if (g[i] == g[j]) continue;
+        const double s = (c[j] - c[i]) / (g[i] - g[j]);
+        if (s > lo && s < hi) deepest = std::max(deepest, inside_by(s));
+      }
+    }
+  }
+  return deepest;
+}
+
 // The distance between two triangles where they do not intersect: the least of each corner's
 // distance to the other triangle and each pair of edges' distance. Floating point.
 double triangle_distance(const std::array<Vec3, 3>& a, const std::array<Vec3, 3>& b) {
@@ -107,15 +181,16 @@ SurfaceIntersections count_surface_intersections(const MaterialSurface& surface,
   };
   // Two sides of a cut pressed into each other, less than `opened` deep: triangles that touch in
   // the material (decided exactly, or apart by no more than the rounding of rest points) and now
-  // cross no deeper than that (either reaches at most `opened` behind the other). Pressed
-  // together, the sides of a cut slide along each other (each bulges as it is squeezed), so their
-  // twin points part while the cut stays closed.
+  // cross no deeper than that (either reaches at most `opened` behind the other, or, where they
+  // are not coplanar, they cross within `opened` of both rims: crossing_depth). Pressed
+  // together, the sides of a cut slide along each other (each bulges as it is squeezed), so
+  // their twin points part while the cut stays closed.
   const auto pressed_cut = [&](Index a, Index b, const std::array<Vec3, 3>& ca, const std::array<Vec3, 3>& cb) {
     const auto rest = [&](Index t) {
       return std::array<Vec3, 3>{s.vertices.row(s.triangles(t, 0)).transpose(), s.vertices.row(s.triangles(t, 1)).transpose(),
                                  s.vertices.row(s.triangles(t, 2)).transpose()};
     };
-    if (!(std::min(reach_behind(ca, cb), reach_behind(cb, ca)) <= opened)) return false;
+    if (!(std::min(reach_behind(ca, cb), reach_behind(cb, ca)) <= opened) && !(crossing_depth(ca, cb) <= opened)) return false;
     const auto ra = rest(a), rb = rest(b);
     if (!geometry::collinear(ra[0], ra[1], ra[2]) && !geometry::collinear(rb[0], rb[1], rb[2]) && triangles_intersect(ra, rb)) return true;
     // Copies may round one exact point differently (a junction of two cuts is placed from each

@@ -118,6 +118,35 @@ TEST(SurfaceIntersections, ARimApartInTheMaterialByLessThanAllowedCountsOnlyPres
   EXPECT_EQ(count_surface_intersections(surface, copies, pressed(1e-2), 1e-3).intersecting_pairs, 1);
 }
 
+// Where a third face meets a cut: a stick's side (plane y = 0, material at y > 0, x > 0) and its
+// neighbour's top face (plane z = 0, material below, x < 0), which touch at one point in the
+// material (Figure 4's sticks). Pressed p into the neighbour and slid 3p along the cut (so that
+// their corners, one point in the material, are apart by more than the allowance), the side
+// crosses the top face in a strip p wide along both rims, though either triangle reaches nearly
+// its whole size behind the other: within an allowance of 2p, not counted; allowed p / 2, or
+// pressed 0.1 in, counted.
+TEST(SurfaceIntersections, AFacePressedAcrossARimCountsByHowFarFromTheRimsItCrosses) {
+  MaterialSurface surface;
+  surface.surface.vertices.resize(6, 3);
+  surface.surface.vertices << 0, 0, -1, 1, 0, 0, 0, 0, 0,  // the side, normal -y
+      0, 0, 0, 0, 1, 0, -1, 1, 0;                         // the top face, normal +z
+  surface.surface.triangles.resize(2, 3);
+  surface.surface.triangles << 0, 1, 2, 3, 4, 5;
+  surface.triangle_tet = {0, 1};
+  surface.triangle_source = {0, -1};
+  const std::vector<std::array<Index, 4>> copies = {{0, 1, 2, 3}, {4, 5, 6, 7}};
+  const auto pressed = [&](double by) {
+    Points at = surface.surface.vertices;
+    for (Index v = 0; v < 3; ++v) at.row(v) += Eigen::RowVector3d(-by, 3 * by, 3 * by);
+    return at;
+  };
+  constexpr double kPressed = 1e-3;
+  EXPECT_EQ(count_surface_intersections(surface, copies, surface.surface.vertices, 2 * kPressed).intersecting_pairs, 0);
+  EXPECT_EQ(count_surface_intersections(surface, copies, pressed(kPressed), 2 * kPressed).intersecting_pairs, 0);
+  EXPECT_EQ(count_surface_intersections(surface, copies, pressed(kPressed), kPressed / 2).intersecting_pairs, 1);
+  EXPECT_EQ(count_surface_intersections(surface, copies, pressed(0.1), 2 * kPressed).intersecting_pairs, 1);
+}
+
 // One piece: an incision x = 0.5 from the top down to z = 0.3. Its right lip, pushed left far
 // from the incision's end, passes through the left lip: parts of one piece, seen.
 TEST(SurfaceIntersections, LipsOfAnIncisionCrossingAreSeen) {
