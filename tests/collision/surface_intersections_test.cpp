@@ -91,6 +91,26 @@ TEST(SurfaceIntersections, SidesOfACutPressedAndSlidCountOnlyDeeperThanAllowed) 
   EXPECT_GT(count_surface_intersections(b.result.surface, b.copies, moved(b, Vec3(-0.2, -0.1, 0.1)), 2 * pressed).intersecting_pairs, 10);
 }
 
+// Two triangles of two copies (a cut's triangle, then an outer face's), corners given row by row,
+// and the corners of the first moved by `move`.
+struct TwoTriangles {
+  MaterialSurface surface;
+  std::vector<std::array<Index, 4>> copies = {{0, 1, 2, 3}, {4, 5, 6, 7}};
+  explicit TwoTriangles(const Eigen::Matrix<double, 6, 3, Eigen::RowMajor>& corners) {
+    surface.surface.vertices = corners;
+    surface.surface.triangles.resize(2, 3);
+    surface.surface.triangles << 0, 1, 2, 3, 4, 5;
+    surface.triangle_tet = {0, 1};
+    surface.triangle_source = {0, -1};
+  }
+  Points first_moved(const Vec3& move) const {
+    Points at = surface.surface.vertices;
+    for (Index v = 0; v < 3; ++v) at.row(v) += move.transpose();
+    return at;
+  }
+  Index crossing(const Points& at, double opened) const { return count_surface_intersections(surface, copies, at, opened).intersecting_pairs; }
+};
+
 // Where a cut's rim meets the outer surface: a wall (plane x = 0, material at x > 0) and the top
 // face beside it of another copy (plane z = 0, material below), 2e-4 apart in the material, as the
 // two sides' fans over their polygons may leave them. The wall moved 3e-4 to -x and 1e-4 up
@@ -98,24 +118,15 @@ TEST(SurfaceIntersections, SidesOfACutPressedAndSlidCountOnlyDeeperThanAllowed) 
 // covers both the gap and the depth, not counted; with less allowed, or pressed 0.01 in, counted.
 TEST(SurfaceIntersections, ARimApartInTheMaterialByLessThanAllowedCountsOnlyPressedDeeper) {
   constexpr double kGap = 2e-4;
-  MaterialSurface surface;
-  surface.surface.vertices.resize(6, 3);
-  surface.surface.vertices << 0, 0, 0, 0, 1, 0, 0, 0.5, -1,  // the wall, normal -x
-      -kGap, 0.2, 0, -kGap, 0.8, 0, -1, 0.2, 0;              // the top face, normal +z
-  surface.surface.triangles.resize(2, 3);
-  surface.surface.triangles << 0, 1, 2, 3, 4, 5;
-  surface.triangle_tet = {0, 1};
-  surface.triangle_source = {0, -1};
-  const std::vector<std::array<Index, 4>> copies = {{0, 1, 2, 3}, {4, 5, 6, 7}};
-  const auto pressed = [&](double by) {
-    Points at = surface.surface.vertices;
-    for (Index v = 0; v < 3; ++v) at.row(v) += Eigen::RowVector3d(-kGap - by, 0, 1e-4);
-    return at;
-  };
-  EXPECT_EQ(count_surface_intersections(surface, copies, surface.surface.vertices, 1e-3).intersecting_pairs, 0);
-  EXPECT_EQ(count_surface_intersections(surface, copies, pressed(1e-4), 1e-3).intersecting_pairs, 0);
-  EXPECT_EQ(count_surface_intersections(surface, copies, pressed(1e-4), 5e-5).intersecting_pairs, 1);
-  EXPECT_EQ(count_surface_intersections(surface, copies, pressed(1e-2), 1e-3).intersecting_pairs, 1);
+  Eigen::Matrix<double, 6, 3, Eigen::RowMajor> corners;
+  corners << 0, 0, 0, 0, 1, 0, 0, 0.5, -1,  // the wall, normal -x
+      -kGap, 0.2, 0, -kGap, 0.8, 0, -1, 0.2, 0;  // the top face, normal +z
+  const TwoTriangles t(corners);
+  const auto pressed = [&](double by) { return t.first_moved(Vec3(-kGap - by, 0, 1e-4)); };
+  EXPECT_EQ(t.crossing(t.surface.surface.vertices, 1e-3), 0);
+  EXPECT_EQ(t.crossing(pressed(1e-4), 1e-3), 0);
+  EXPECT_EQ(t.crossing(pressed(1e-4), 5e-5), 1);
+  EXPECT_EQ(t.crossing(pressed(1e-2), 1e-3), 1);
 }
 
 // Where a third face meets a cut: a stick's side (plane y = 0, material at y > 0, x > 0) and its
@@ -126,25 +137,16 @@ TEST(SurfaceIntersections, ARimApartInTheMaterialByLessThanAllowedCountsOnlyPres
 // its whole size behind the other: within an allowance of 2p, not counted; allowed p / 2, or
 // pressed 0.1 in, counted.
 TEST(SurfaceIntersections, AFacePressedAcrossARimCountsByHowFarFromTheRimsItCrosses) {
-  MaterialSurface surface;
-  surface.surface.vertices.resize(6, 3);
-  surface.surface.vertices << 0, 0, -1, 1, 0, 0, 0, 0, 0,  // the side, normal -y
-      0, 0, 0, 0, 1, 0, -1, 1, 0;                         // the top face, normal +z
-  surface.surface.triangles.resize(2, 3);
-  surface.surface.triangles << 0, 1, 2, 3, 4, 5;
-  surface.triangle_tet = {0, 1};
-  surface.triangle_source = {0, -1};
-  const std::vector<std::array<Index, 4>> copies = {{0, 1, 2, 3}, {4, 5, 6, 7}};
-  const auto pressed = [&](double by) {
-    Points at = surface.surface.vertices;
-    for (Index v = 0; v < 3; ++v) at.row(v) += Eigen::RowVector3d(-by, 3 * by, 3 * by);
-    return at;
-  };
+  Eigen::Matrix<double, 6, 3, Eigen::RowMajor> corners;
+  corners << 0, 0, -1, 1, 0, 0, 0, 0, 0,  // the side, normal -y
+      0, 0, 0, 0, 1, 0, -1, 1, 0;          // the top face, normal +z
+  const TwoTriangles t(corners);
+  const auto pressed = [&](double by) { return t.first_moved(Vec3(-by, 3 * by, 3 * by)); };
   constexpr double kPressed = 1e-3;
-  EXPECT_EQ(count_surface_intersections(surface, copies, surface.surface.vertices, 2 * kPressed).intersecting_pairs, 0);
-  EXPECT_EQ(count_surface_intersections(surface, copies, pressed(kPressed), 2 * kPressed).intersecting_pairs, 0);
-  EXPECT_EQ(count_surface_intersections(surface, copies, pressed(kPressed), kPressed / 2).intersecting_pairs, 1);
-  EXPECT_EQ(count_surface_intersections(surface, copies, pressed(0.1), 2 * kPressed).intersecting_pairs, 1);
+  EXPECT_EQ(t.crossing(t.surface.surface.vertices, 2 * kPressed), 0);
+  EXPECT_EQ(t.crossing(pressed(kPressed), 2 * kPressed), 0);
+  EXPECT_EQ(t.crossing(pressed(kPressed), kPressed / 2), 1);
+  EXPECT_EQ(t.crossing(pressed(0.1), 2 * kPressed), 1);
 }
 
 // One piece: an incision x = 0.5 from the top down to z = 0.3. Its right lip, pushed left far
