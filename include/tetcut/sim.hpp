@@ -283,8 +283,7 @@ class Simulator {
   /// behind the other side's triangles), and, while springs (add_spring) suture an incision, pairs between the copies they
   /// hold that were within the thickness of each other in the material (the springs pull them
   /// back together) (see src/sim/surface_contact.hpp for the rule, why it should not miss a
-  /// collision for long, and where it does: pieces that stay in contact and slide and turn
-  /// against each other, as in a pile of sticks cut from one block). Give the surface again after every cut (remesh drops it, as it drops
+  /// collision for long, and what it may still miss). Give the surface again after every cut (remesh drops it, as it drops
   /// the contact points). O(F log F) now; each evaluation O(V + pairs near), parallel.
   /// Error(kInvalidArgument) when the surface names copies or vertices that do not exist.
   void set_contact_surface(const MaterialSurface& surface, const SurfaceContactOptions& options = {});

@@ -10,6 +10,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <tuple>
 
 namespace tetcut::sim::detail {
 namespace {
@@ -780,7 +781,7 @@ void SurfaceContact::lag_guards(const Points& start) {
   guards_.clear();
   if (!enabled() || joins_.empty()) return;
   cover(start, 0);
-  measure(Measure::kJoinedVertexTriangle);
+  measure(Measure::kJoined);
   const double dhat = settings_.thickness, delta = guard_allowance();
   struct Found {
     Index vertex;
@@ -820,6 +821,7 @@ void SurfaceContact::lag_guards(const Points& start) {
   // of its cut polygon) needs one, by the triangle it lies most inside; its planes differ only
   // where cuts or faces meet. Fewer terms, the same constraint: g is the same on coplanar
   // triangles.
+  std::vector<Index> guard_vertex;  // per vertex guard, its vertex (ascending)
   std::sort(found.begin(), found.end(), [](const Found& x, const Found& y) {
     return x.vertex != y.vertex ? x.vertex < y.vertex : x.inside != y.inside ? x.inside > y.inside : x.k < y.k;
   });
@@ -834,8 +836,51 @@ void SurfaceContact::lag_guards(const Points& start) {
       collision::Proximity foot;
       foot.w = {1.0, -found[j].beta[0], -found[j].beta[1], -found[j].beta[2]};
       guards_.push_back({term(candidates_[found[j].k], foot), found[j].normal});
+      guard_vertex.push_back(found[j].vertex);
     }
     i = end;
+  }
+  // Edges: a pair of edges of joined copies within dhat, one on a face the other's faces face (the
+  // two sides of a cut, or a face meeting the cut at a rim and the other side), keeps the vector
+  // between its closest points in front of that face's plane, the same one-sided barrier. A vertex
+  // guard lapses once its vertex is beyond dhat of the face it faced; the edge behind it, whose
+  // pairs all touch in the material, is held here (Figure 4's pile: a stick's side face sagging
+  // through its neighbour's corner while both its ends are past the neighbour's faces).
+  for (std::size_t k = 0; k < candidates_.size(); ++k) {
+    const Candidate& c = candidates_[k];
+    if (!c.joined || c.sutured || !c.edges || !(proximities_[k].distance < dhat)) continue;
+    const collision::Proximity& p = proximities_[k];
+    const std::array<Index, 4> corner = corners(c);
+    // The faces of edge (k0, k1), turned against a face around the other edge's corners; sign +1
+    // when the faces are the second edge's (r points from them to the first edge), -1 otherwise.
+    for (const auto& [first, second, sign] : {std::tuple{0, 2, 1.0}, std::tuple{2, 0, -1.0}}) {
+      const Index a = corner[static_cast<std::size_t>(second)], b = corner[static_cast<std::size_t>(second) + 1];
+      for (Index i = vertex_triangle_start_[a]; i < vertex_triangle_start_[a + 1]; ++i) {
+        const Index t = vertex_triangles_[i];
+        const auto& tri = triangles_[static_cast<std::size_t>(t)];
+        if (std::find(tri.begin(), tri.end(), b) == tri.end()) continue;
+        const Vec3& facing = rest_normals_[static_cast<std::size_t>(t)];
+        if (facing.isZero() || !(vertex_faces(corner[static_cast<std::size_t>(first)], facing) ||
+                                 vertex_faces(corner[static_cast<std::size_t>(first) + 1], facing))) {
+          continue;
+        }
+        const Vec3 normal = unit_normal(y_.row(tri[0]).transpose(), y_.row(tri[1]).transpose(), y_.row(tri[2]).transpose(), dhat);
+        if (normal.isZero()) continue;
+        if (!(sign * normal.dot(p.r) > -delta)) continue;  // already behind
+        // Both ends held to this plane by their own guards hold the edge (g is linear along it).
+        const auto held = [&](Index v) {
+          const auto [lo, hi] = std::equal_range(guard_vertex.begin(), guard_vertex.end(), v);
+          for (auto it = lo; it != hi; ++it) {
+            if (guards_[static_cast<std::size_t>(it - guard_vertex.begin())].normal.dot(normal) > 1 - kSamePlane) return true;
+          }
+          return false;
+        };
+        if (held(corner[static_cast<std::size_t>(first)]) && held(corner[static_cast<std::size_t>(first) + 1])) continue;
+        collision::Proximity foot = p;
+        for (double& w : foot.w) w *= sign;
+        guards_.push_back({term(c, foot), normal});
+      }
+    }
   }
 }
 
