@@ -72,8 +72,9 @@ json_check lip-contact/summary.json 'j["spring_gap_when_attached"] > 0.1 and j["
 # Figure 4 in between: the cube cut by five planes each way (0.0123 off i/6) into 36 sticks,
 # tilted and dropped as above. Piled, a stick slides and turns against its neighbour and carries
 # its side's vertices more than the thickness past the faces they faced, whose guards then lapse:
-# without the guards on edges, side faces sagged through neighbours' corners (17, 52, 100 and 85 crossing
-# pairs in the last four frames); with them, none in any frame.
+# without the guards on edges, side faces sagged through neighbours' corners (17 and 52 crossing
+# pairs in the last two frames of these 0.35 s, 100 by 0.45 s); with them, none in any frame.
+# (The top started at about 1.9; at 0.35 s it is 1.37.)
 expect_exit 0 "$TETCUT" sim "$DATA/scenes/thirty_six_sticks.json" -o sticks36 --check-intersections
-json_check sticks36/summary.json 'j["pieces"] == 36 and len(j["intersecting_pairs"]) == 10 and max(j["intersecting_pairs"]) == 0'
-json_check sticks36/summary.json 'j["final_box"][5] < 1.3 and j["final_box"][2] > -0.2'
+json_check sticks36/summary.json 'j["pieces"] == 36 and len(j["intersecting_pairs"]) == 8 and max(j["intersecting_pairs"]) == 0'
+json_check sticks36/summary.json 'j["final_box"][5] < 1.45 and j["final_box"][2] > -0.2'
