@@ -846,6 +846,14 @@ void SurfaceContact::lag_guards(const Points& start) {
   // guard lapses once its vertex is beyond dhat of the face it faced; the edge behind it, whose
   // pairs all touch in the material, is held here (Figure 4's pile: a stick's side face sagging
   // through its neighbour's corner while both its ends are past the neighbour's faces).
+  // Whether vertex v has a vertex guard on the plane with this normal.
+  const auto held = [&](Index v, const Vec3& normal) {
+    const auto [lo, hi] = std::equal_range(guard_vertex.begin(), guard_vertex.end(), v);
+    for (auto it = lo; it != hi; ++it) {
+      if (guards_[static_cast<std::size_t>(it - guard_vertex.begin())].normal.dot(normal) > 1 - kSamePlane) return true;
+    }
+    return false;
+  };
   for (std::size_t k = 0; k < candidates_.size(); ++k) {
     const Candidate& c = candidates_[k];
     if (!c.joined || c.sutured || !c.edges || !(proximities_[k].distance < dhat)) continue;
@@ -868,14 +876,7 @@ void SurfaceContact::lag_guards(const Points& start) {
         if (normal.isZero()) continue;
         if (!(sign * normal.dot(p.r) > -delta)) continue;  // already behind
         // Both ends held to this plane by their own guards hold the edge (g is linear along it).
-        const auto held = [&](Index v) {
-          const auto [lo, hi] = std::equal_range(guard_vertex.begin(), guard_vertex.end(), v);
-          for (auto it = lo; it != hi; ++it) {
-            if (guards_[static_cast<std::size_t>(it - guard_vertex.begin())].normal.dot(normal) > 1 - kSamePlane) return true;
-          }
-          return false;
-        };
-        if (held(corner[static_cast<std::size_t>(first)]) && held(corner[static_cast<std::size_t>(first) + 1])) continue;
+        if (held(corner[static_cast<std::size_t>(first)], normal) && held(corner[static_cast<std::size_t>(first) + 1], normal)) continue;
         collision::Proximity foot = p;
         for (double& w : foot.w) w *= sign;
         guards_.push_back({term(c, foot), normal});

@@ -67,8 +67,8 @@
 // Why this should not miss a real collision for long, and where it does: copies are joined only
 // while some of their surfaces are still touching where they were cut apart; a copy spans one
 // tet, so only the two sides of a cut within a tet of each other are affected, and there they are
-// guarded, not ignored; what goes unseen is edge-edge crossings of joined copies and vertices that
-// do not face the triangle they approach (a cut's rim meeting the other side's outer surface),
+// guarded, not ignored; what goes unseen is edge-edge crossings of joined copies whose edges lie
+// on no faces turned against each other, and vertices that do not face the triangle they approach (a cut's rim meeting the other side's outer surface),
 // bounded by the allowance while their neighbours are guarded, and counted by the exact check
 // (count_surface_intersections) if they go deeper. Pieces that stay in contact (a pile of sticks)
 // stay joined for good, and there the vertex guards alone lapsed (a vertex carried more than dhat
