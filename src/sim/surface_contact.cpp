@@ -134,12 +134,7 @@ double friction_energy(const Vec3& u, const Vec3& n, double normal_force, double
 }
 
 double lagged_friction(const Vec3& u, const Vec3& n, double normal_force, double mu, double eps, Vec3* gradient, Mat3* matrix) {
-  const double energy = friction_energy(u, n, normal_force, mu, eps, gradient);
-  const Mat3 P = Mat3::Identity() - n * n.transpose();
-  const double y = (P * u).norm();
-  const double f1_over_y = y < eps ? 2 / eps - y / (eps * eps) : 1 / y;
-  *matrix = mu * normal_force * f1_over_y * P;
-  return energy;
+  return friction_energy(u, n, normal_force, mu, eps, gradient, matrix);
 }
 
 void SurfaceContact::lag_friction(const Points& start) {

@@ -127,9 +127,10 @@ double pair_energy(const std::array<Vec3, 4>& y, bool edges, double dhat, double
 double friction_energy(const Vec3& u, const Vec3& n, double normal_force, double mu, double eps, Vec3* gradient = nullptr,
                        Mat3* hessian = nullptr);
 /// The same as a soft-constraint term of the Newton system: D, dD/du and, for the matrix, the
-/// positive semi-definite mu lambda f1(y)/y (I - n n^T) (IPC's choice: the exact Hessian's other
-/// part, along the slip, is negative where the friction force saturates). For surface pairs and
-/// for points pressed into obstacles alike.
+/// exact Hessian, positive semi-definite as it is: mu lambda (f1'(y) s s^T + f1(y)/y (P - s s^T))
+/// with s the slip's direction and P = I - n n^T, where f1' >= 0 (0 once the force saturates).
+/// The matrix mu lambda f1(y)/y P, stiffer along the slip than the energy, made sliding contact's
+/// Newton converge only linearly. For surface pairs and for points pressed into obstacles alike.
 double lagged_friction(const Vec3& u, const Vec3& n, double normal_force, double mu, double eps, Vec3* gradient, Mat3* matrix);
 
 /// One pair as a soft constraint: r = sum_i coefficients[i] x_{nodes[i]} (count distinct nodes).
