@@ -97,6 +97,8 @@ void BlockSparseMatrix::build(Index num_nodes, std::span<const std::array<Index,
   });
   added_.assign(static_cast<std::size_t>(num_nodes), {});
   added_columns_.clear();
+  added_keys_.clear();
+  added_key_slots_.clear();
   values_.clear();
   single_values_.clear();
   added_values_.clear();
@@ -140,15 +142,56 @@ Index BlockSparseMatrix::find_or_add(Index row, Index column) {
   added_columns_.push_back(column);
   resize_values();
   added_[row].push_back(k);
+  index_added(key(row, column), k);
   return k;
 }
 
+namespace {
+// Fibonacci hashing of a (row, column) key into a table of 2^bits entries.
+std::size_t hash_position(std::uint64_t key, std::size_t mask) { return static_cast<std::size_t>((key * 0x9E3779B97F4A7C15ull) >> 32) & mask; }
+}  // namespace
+
+Index BlockSparseMatrix::added_slot(std::uint64_t k) const {
+  if (added_keys_.empty()) return -1;
+  const std::size_t mask = added_keys_.size() - 1;
+  for (std::size_t i = hash_position(k, mask);; i = (i + 1) & mask) {
+    if (added_keys_[i] == k) return added_key_slots_[i];
+    if (added_keys_[i] == kNoKey) return -1;
+  }
+}
+
+void BlockSparseMatrix::index_added(std::uint64_t k, Index slot) {
+  if (2 * (added_columns_.size() + 1) > added_keys_.size()) {
+    // Grow to keep the table at most half full: every added block again.
+    const std::size_t capacity = std::max<std::size_t>(64, 4 * added_keys_.size());
+    added_keys_.assign(capacity, kNoKey);
+    added_key_slots_.assign(capacity, -1);
+    const auto built = static_cast<Index>(columns_.size());
+    for (Index r = 0; r < num_rows(); ++r) {
+      for (const Index a : added_[r]) {
+        if (a == slot) continue;
+        const std::uint64_t other = key(r, added_columns_[static_cast<std::size_t>(a - built)]);
+        std::size_t i = hash_position(other, capacity - 1);
+        while (added_keys_[i] != kNoKey) i = (i + 1) & (capacity - 1);
+        added_keys_[i] = other;
+        added_key_slots_[i] = a;
+      }
+    }
+  }
+  const std::size_t mask = added_keys_.size() - 1;
+  std::size_t i = hash_position(k, mask);
+  while (added_keys_[i] != kNoKey) i = (i + 1) & mask;
+  added_keys_[i] = k;
+  added_key_slots_[i] = slot;
+}
+
 Index BlockSparseMatrix::slot(Index row, Index column) const {
-  Index found = -1;
-  for_each_block(row, [&](Index k, Index c) {
-    if (c == column) found = k;
-  });
-  return found;
+  if (row < built_rows()) {
+    const auto begin = columns_.begin() + row_start_[row], end = columns_.begin() + row_start_[row + 1];
+    const auto it = std::lower_bound(begin, end, column);
+    if (it != end && *it == column) return static_cast<Index>(it - columns_.begin());
+  }
+  return added_slot(key(row, column));
 }
 
 void BlockSparseMatrix::set_zero() {

@@ -70,14 +70,17 @@ class BlockSparseMatrix {
   /// Appends rows (new nodes) holding their diagonal block. No slot moves.
   void add_rows(Index count);
   /// The slot of block (row, column), added (zero) when missing: blocks added after a build go to
-  /// a small area of their own, so no slot moves. O(row length).
+  /// a small area of their own, so no slot moves. O(log row length) (see slot).
   Index find_or_add(Index row, Index column);
 
   Index num_rows() const { return static_cast<Index>(diagonal_.size()); }
   /// Blocks in the pattern (a coupling a cut removed stays, as zeros, until the next build).
   Index num_blocks() const { return static_cast<Index>(columns_.size() + added_columns_.size()); }
   Index num_added_blocks() const { return static_cast<Index>(added_columns_.size()); }
-  /// The slot of block (row, column), or -1 when it is not in the pattern. O(row length).
+  /// The slot of block (row, column), or -1 when it is not in the pattern: a binary search of the
+  /// build's row, then a hash of the added blocks (surface contact adds a block per pair of nodes
+  /// its terms couple, up to 256 per term and a million an assembly on a pile, so a scan of the
+  /// row, which contact makes long, took a quarter of a piled step). O(log row length).
   Index slot(Index row, Index column) const;
   Index diagonal_slot(Index row) const { return diagonal_[row]; }
   /// Calls visit(slot, column) for each block of `row`: those of the build by ascending column,
@@ -170,6 +173,15 @@ class BlockSparseMatrix {
   std::vector<Index> added_columns_;
   std::vector<double> added_values_;
   std::vector<float> single_added_values_;
+  // The added blocks' slots by (row, column): open addressing, linear probing, at most half full.
+  static constexpr std::uint64_t kNoKey = ~std::uint64_t{0};
+  static std::uint64_t key(Index row, Index column) {
+    return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(row)) << 32) | static_cast<std::uint32_t>(column);
+  }
+  Index added_slot(std::uint64_t key) const;
+  void index_added(std::uint64_t key, Index slot);
+  std::vector<std::uint64_t> added_keys_;
+  std::vector<Index> added_key_slots_;
   std::vector<Index> diagonal_;
 };
 

@@ -11,6 +11,7 @@
 #include <Eigen/Dense>
 #include <tbb/task_arena.h>
 
+#include <map>
 #include <random>
 #include <set>
 
@@ -114,6 +115,65 @@ TEST(BlockSparseMatrix, MaskedProductIsTheDenseProductOverFreeNodes) {
   for (Index v = 0; v < n; ++v) {
     if (!free[v]) expected.segment<3>(3 * v).setZero();
   }
+  EXPECT_LT((y - expected).norm(), 1e-12 * expected.norm());
+}
+
+// Blocks added after the build (surface contact's couplings): thousands of them, in random order
+// and with repeats, so that their index grows several times; each keeps its slot, blocks never
+// added are not found, rows appended later take blocks too, and the product counts them all.
+TEST(BlockSparseMatrix, AddedBlocksKeepTheirSlotsAndEnterTheProduct) {
+  const TetMesh mesh = make_bcc(Box{Vec3(0, 0, 0), Vec3(1, 1, 1)}, 0.3);
+  Eigen::MatrixXd dense;
+  BlockSparseMatrix a = random_system(mesh, &dense, 5);
+  const Index built_blocks = a.num_blocks();
+  a.add_rows(3);
+  const Index n = a.num_rows();
+  dense.conservativeResize(3 * n, 3 * n);
+  dense.rightCols(9).setZero();
+  dense.bottomRows(9).setZero();
+  for (Index v = n - 3; v < n; ++v) {
+    a.add_to_diagonal(v, 0.5);
+    for (int k = 0; k < 3; ++k) dense(3 * v + k, 3 * v + k) = 0.5;
+  }
+  std::mt19937_64 rng(11);
+  std::uniform_int_distribution<Index> node(0, n - 1);
+  std::map<std::pair<Index, Index>, Index> slots;
+  for (int i = 0; i < 20000; ++i) {
+    const Index row = node(rng), column = node(rng);
+    const Index before = a.slot(row, column);
+    const Index k = a.find_or_add(row, column);
+    ASSERT_GE(k, 0);
+    if (before >= 0) {
+      EXPECT_EQ(k, before);
+    }
+    const auto [it, inserted] = slots.emplace(std::pair{row, column}, k);
+    if (!inserted) {
+      EXPECT_EQ(it->second, k);
+    }
+    const double block[9] = {1e-3 * (i % 7), 0, 0, 0, 1e-3, 0, 0, 0, 2e-3};
+    a.add(k, block);
+    for (int r = 0; r < 3; ++r) {
+      for (int c = 0; c < 3; ++c) dense(3 * row + r, 3 * column + c) += block[3 * r + c];
+    }
+  }
+  EXPECT_GT(a.num_added_blocks(), 10000);
+  EXPECT_EQ(a.num_blocks(), built_blocks + a.num_added_blocks());
+  for (const auto& [key, k] : slots) EXPECT_EQ(a.slot(key.first, key.second), k);
+  // Pairs never added nor coupled by a tet: not in the pattern.
+  Index absent = 0;
+  for (Index row = 0; row < n; ++row) {
+    for (Index column = 0; column < n; ++column) {
+      if (slots.count({row, column}) || dense.block<3, 3>(3 * row, 3 * column).norm() != 0) continue;
+      EXPECT_EQ(a.slot(row, column), -1);
+      ++absent;
+    }
+  }
+  EXPECT_GT(absent, 0);
+  const std::vector<std::uint8_t> free(static_cast<std::size_t>(n), 1);
+  const Eigen::VectorXd x = Eigen::VectorXd::Random(3 * n);
+  Eigen::VectorXd y(3 * n);
+  a.multiply(x.data(), y.data(), free.data());
+  const Eigen::VectorXd expected = dense * x;
   EXPECT_LT((y - expected).norm(), 1e-12 * expected.norm());
 }
 
