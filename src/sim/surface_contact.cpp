@@ -25,6 +25,14 @@ constexpr double kAdvanceShare = 0.9;
 // Conservative advancement gives up refining after this many advances and keeps the safe time
 // reached (a pair sliding along another approaches slowly; the next Newton iteration goes on).
 constexpr int kMaxAdvances = 64;
+// The farthest one Newton step may move the surface's parts relative to each other, in contact
+// thicknesses: a longer direction is shortened to it before continuous collision detection (a
+// trust region). The candidate list covers the whole move (radius 2 dhat + 2 sweep), so its
+// pairs grow as the cube of the move: a wild direction on Figure 4's pile (500 to 700 dhat) made
+// a list that ran out of 16 GB, and 10 dhat still took 12 GB there. At 2, the scenes' ordinary
+// steps are rarely shortened (the flap 41 times in 150 steps, by at most a quarter; 36 sticks
+// twice), with the same Newton iterations.
+constexpr double kMaxSweep = 2;
 // A triangle whose height is below this share of its longest edge, or of the contact thickness
 // where that is longer, has no normal a guard could use: fans over the surface's polygons make
 // triangles of collinear points and of points a rounding apart (exactly, in the material), whose
@@ -697,9 +705,11 @@ double SurfaceContact::max_step(const Points& from, const double* direction) {
   if (!enabled()) return 1;
   // How far any vertex moves over the whole step, relative to the others (see surface_motion).
   const Eigen::Map<const Points> motion(direction, from.rows(), 3);
-  const auto node_motion = [&](Index n) { return Vec3(motion.row(n).transpose()); };
-  const double sweep = surface_motion(node_motion);
-  if (!(sweep > 0)) return 1;
+  const double whole_sweep = surface_motion([&](Index n) { return Vec3(motion.row(n).transpose()); });
+  if (!(whole_sweep > 0)) return 1;
+  // The move considered: the direction, shortened to the trust region where it goes beyond it.
+  const double share = std::min(1.0, kMaxSweep * settings_.thickness / whole_sweep), sweep = share * whole_sweep;
+  const auto node_motion = [&](Index n) { return Vec3(share * motion.row(n).transpose()); };
   cover(from, sweep);
   std::vector<double> smallest(static_cast<std::size_t>((static_cast<Index>(candidates_.size()) + kNodeChunk - 1) / kNodeChunk) + 1, 1.0);
   for_chunks(static_cast<Index>(candidates_.size()), kNodeChunk, [&](Index begin, Index end, Index chunk) {
@@ -769,7 +779,7 @@ double SurfaceContact::max_step(const Points& from, const double* direction) {
     // allowance is used up.
     if (rate < 0) t_guard = std::min(t_guard, std::max(0.0, (1 - kKeepShare) * (g + delta) / -rate));
   }
-  return std::min(t_guard, *std::min_element(smallest.begin(), smallest.end()));
+  return std::min(t_guard, share * *std::min_element(smallest.begin(), smallest.end()));
 }
 
 void SurfaceContact::lag_guards(const Points& start) {

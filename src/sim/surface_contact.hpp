@@ -172,6 +172,8 @@ class SurfaceContact {
   /// The largest t in (0, 1] such that moving the nodes from `from` along t * direction (3 per
   /// node) keeps every counted pair at a positive distance, with a margin: conservative
   /// advancement stops a pair at a tenth of its starting distance. 1 when nothing comes close.
+  /// A direction moving parts of the surface more than two thicknesses relative to each other is
+  /// first shortened to that (a trust region): the candidate list covers the move considered.
   double max_step(const Points& from, const double* direction);
 
   /// Friction of the step starting at `start`: the pairs in contact there, each with its normal

@@ -335,6 +335,37 @@ TEST(SurfaceContact, TheSidesOfACurvedCutDoNotPushEachOtherAtRest) {
   }
 }
 
+// A Newton direction that flings one block 40 m away from the other (nothing in between): the step
+// is shortened to the trust region, two thicknesses of relative motion, and the candidate list
+// covers that move only. Covering the whole move listed every pair of the two blocks, and on
+// Figure 4's pile ran out of memory.
+TEST(SurfaceContact, AWildDirectionIsShortenedToTheTrustRegion) {
+  const TetMesh mesh = two_blocks(0.3);
+  Cutter cutter(mesh);
+  const MaterialSurface surface = cutter.surface();
+  const auto& copies = cutter.tet_nodes();
+  const double dhat = 0.01;
+  sim::detail::SurfaceContact contact;
+  const std::vector<std::uint8_t> changed(copies.size(), 0);
+  sim::SurfaceContactOptions options;
+  options.thickness = dhat;
+  options.stiffness = 1e3;
+  contact.set_surface(surface, copies, mesh.rest(), mesh.rest(), changed, options, soft().youngs_modulus);
+  std::vector<double> direction(3 * static_cast<std::size_t>(mesh.num_nodes()), 0.0);
+  for (Index v = 0; v < mesh.num_nodes(); ++v) {
+    if (mesh.rest()(v, 2) > 1.1) direction[3 * v + 2] = 40;  // the upper block, straight up
+  }
+  const double t = contact.max_step(mesh.rest(), direction.data());
+  // Two thicknesses of 40 m (relative to the motions' middle: 20 m each way).
+  EXPECT_GT(t, 0);
+  EXPECT_LE(t, 2 * dhat / 20 * (1 + 1e-12));
+  EXPECT_GE(t, 2 * dhat / 20 * (1 - 1e-12));
+  EXPECT_EQ(contact.num_candidates(), 0);  // the blocks are 0.3 apart: no pair within the move
+  // A short direction is taken whole.
+  for (double& d : direction) d *= 1e-4;
+  EXPECT_EQ(contact.max_step(mesh.rest(), direction.data()), 1);
+}
+
 TEST(SurfaceContact, FrictionGradientAndHessianMatchFiniteDifferences) {
   const Vec3 n = Vec3(0.2, -0.3, 1).normalized();
   const double eps = 1e-3, mu = 0.4, force = 30;
