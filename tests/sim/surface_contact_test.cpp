@@ -47,6 +47,17 @@ Index crossings(const MaterialSurface& surface, const std::vector<std::array<Ind
   return count_surface_intersections(surface, copies, at, opened).intersecting_pairs;
 }
 
+// Contact on an uncut surface (nothing changed by a cut: no joins) at positions x, with thickness
+// dhat and stiffness 1e3.
+void start_contact(const MaterialSurface& surface, const std::vector<std::array<Index, 4>>& copies, const Points& rest, const Points& x,
+                   double dhat, sim::detail::SurfaceContact* contact) {
+  const std::vector<std::uint8_t> changed(copies.size(), 0);
+  sim::SurfaceContactOptions options;
+  options.thickness = dhat;
+  options.stiffness = 1e3;
+  contact->set_surface(surface, copies, rest, x, changed, options, soft().youngs_modulus);
+}
+
 TEST(SurfaceContact, GradientMatchesFiniteDifferences) {
   const TetMesh mesh = two_blocks(0.05);
   Cutter cutter(mesh);
@@ -63,11 +74,7 @@ TEST(SurfaceContact, GradientMatchesFiniteDifferences) {
     for (int k = 0; k < 3; ++k) x(v, k) += jiggle(random);
   }
   sim::detail::SurfaceContact contact;
-  const std::vector<std::uint8_t> changed(copies.size(), 0);  // nothing was cut: no joins
-  sim::SurfaceContactOptions options;
-  options.thickness = dhat;
-  options.stiffness = 1e3;
-  contact.set_surface(surface, copies, mesh.rest(), x, changed, options, soft().youngs_modulus);
+  start_contact(surface, copies, mesh.rest(), x, dhat, &contact);
   ASSERT_EQ(contact.num_joins(), 0);
   const auto energy_and_gradient = [&](const Points& at, std::vector<double>* gradient) {
     double energy = 0;
@@ -346,11 +353,7 @@ TEST(SurfaceContact, AWildDirectionIsShortenedToTheTrustRegion) {
   const auto& copies = cutter.tet_nodes();
   const double dhat = 0.01;
   sim::detail::SurfaceContact contact;
-  const std::vector<std::uint8_t> changed(copies.size(), 0);
-  sim::SurfaceContactOptions options;
-  options.thickness = dhat;
-  options.stiffness = 1e3;
-  contact.set_surface(surface, copies, mesh.rest(), mesh.rest(), changed, options, soft().youngs_modulus);
+  start_contact(surface, copies, mesh.rest(), mesh.rest(), dhat, &contact);
   std::vector<double> direction(3 * static_cast<std::size_t>(mesh.num_nodes()), 0.0);
   for (Index v = 0; v < mesh.num_nodes(); ++v) {
     if (mesh.rest()(v, 2) > 1.1) direction[3 * v + 2] = 40;  // the upper block, straight up
