@@ -160,29 +160,27 @@ Index BlockSparseMatrix::added_slot(std::uint64_t k) const {
   }
 }
 
-void BlockSparseMatrix::index_added(std::uint64_t k, Index slot) {
-  if (2 * (added_columns_.size() + 1) > added_keys_.size()) {
-    // Grow to keep the table at most half full: every added block again.
-    const std::size_t capacity = std::max<std::size_t>(64, 4 * added_keys_.size());
-    added_keys_.assign(capacity, kNoKey);
-    added_key_slots_.assign(capacity, -1);
-    const auto built = static_cast<Index>(columns_.size());
-    for (Index r = 0; r < num_rows(); ++r) {
-      for (const Index a : added_[r]) {
-        if (a == slot) continue;
-        const std::uint64_t other = key(r, added_columns_[static_cast<std::size_t>(a - built)]);
-        std::size_t i = hash_position(other, capacity - 1);
-        while (added_keys_[i] != kNoKey) i = (i + 1) & (capacity - 1);
-        added_keys_[i] = other;
-        added_key_slots_[i] = a;
-      }
-    }
-  }
+void BlockSparseMatrix::place_added(std::uint64_t k, Index slot) {
   const std::size_t mask = added_keys_.size() - 1;
   std::size_t i = hash_position(k, mask);
   while (added_keys_[i] != kNoKey) i = (i + 1) & mask;
   added_keys_[i] = k;
   added_key_slots_[i] = slot;
+}
+
+void BlockSparseMatrix::index_added(std::uint64_t k, Index slot) {
+  if (2 * (added_columns_.size() + 1) <= added_keys_.size()) {
+    place_added(k, slot);
+    return;
+  }
+  // Grow to keep the table at most half full: every added block again, this one among them.
+  const std::size_t capacity = std::max<std::size_t>(64, 4 * added_keys_.size());
+  added_keys_.assign(capacity, kNoKey);
+  added_key_slots_.assign(capacity, -1);
+  const auto built = static_cast<Index>(columns_.size());
+  for (Index r = 0; r < num_rows(); ++r) {
+    for (const Index a : added_[r]) place_added(key(r, added_columns_[static_cast<std::size_t>(a - built)]), a);
+  }
 }
 
 Index BlockSparseMatrix::slot(Index row, Index column) const {

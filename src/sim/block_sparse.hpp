@@ -179,7 +179,10 @@ class BlockSparseMatrix {
     return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(row)) << 32) | static_cast<std::uint32_t>(column);
   }
   Index added_slot(std::uint64_t key) const;
+  // Indexes a block just added (already in added_ and added_columns_), growing the table first
+  // where it would be more than half full.
   void index_added(std::uint64_t key, Index slot);
+  void place_added(std::uint64_t key, Index slot);  // into a free entry; the table has room
   std::vector<std::uint64_t> added_keys_;
   std::vector<Index> added_key_slots_;
   std::vector<Index> diagonal_;

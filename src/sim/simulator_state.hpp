@@ -225,7 +225,7 @@ void SimulatorState::for_each_constraint(const Points& at, Visit&& visit) const 
     }
     Vec3 g;
     Mat3 matrix;
-    const double energy = detail::lagged_friction(u, f.normal, f.normal_force, f.mu, static_slip, &g, &matrix);
+    const double energy = detail::friction_energy(u, f.normal, f.normal_force, f.mu, static_slip, &g, &matrix);
     visit(nodes, coefficients, 4, energy, g, matrix);
   }
   for (const Simulator::Anchor& anchor : anchors) {

@@ -141,10 +141,6 @@ double friction_energy(const Vec3& u, const Vec3& n, double normal_force, double
   return scale * f0;
 }
 
-double lagged_friction(const Vec3& u, const Vec3& n, double normal_force, double mu, double eps, Vec3* gradient, Mat3* matrix) {
-  return friction_energy(u, n, normal_force, mu, eps, gradient, matrix);
-}
-
 void SurfaceContact::lag_friction(const Points& start) {
   friction_.clear();
   if (!enabled() || !(settings_.friction > 0)) return;

@@ -123,15 +123,14 @@ double pair_energy(const std::array<Vec3, 4>& y, bool edges, double dhat, double
 /// with u the closest points' relative displacement since the step's start and u_T its part
 /// across the (lagged) normal n, D = mu lambda f0(|u_T|), f0(y) = y beyond eps and
 /// -y^3 / (3 eps^2) + y^2 / eps + eps / 3 below (C1: static friction as a stiff spring below
-/// eps). Returns D; the exact gradient and Hessian in u when asked.
+/// eps). Returns D; the exact gradient and Hessian in u when asked. The Newton system takes that
+/// Hessian as it is, for surface pairs and for points pressed into obstacles alike: it is
+/// positive semi-definite, mu lambda (f1'(y) s s^T + f1(y)/y (P - s s^T)) with s the slip's
+/// direction and P = I - n n^T, where f1' >= 0 (0 once the force saturates). The matrix
+/// mu lambda f1(y)/y P, stiffer along the slip than the energy, made sliding contact's Newton
+/// converge only linearly.
 double friction_energy(const Vec3& u, const Vec3& n, double normal_force, double mu, double eps, Vec3* gradient = nullptr,
                        Mat3* hessian = nullptr);
-/// The same as a soft-constraint term of the Newton system: D, dD/du and, for the matrix, the
-/// exact Hessian, positive semi-definite as it is: mu lambda (f1'(y) s s^T + f1(y)/y (P - s s^T))
-/// with s the slip's direction and P = I - n n^T, where f1' >= 0 (0 once the force saturates).
-/// The matrix mu lambda f1(y)/y P, stiffer along the slip than the energy, made sliding contact's
-/// Newton converge only linearly. For surface pairs and for points pressed into obstacles alike.
-double lagged_friction(const Vec3& u, const Vec3& n, double normal_force, double mu, double eps, Vec3* gradient, Mat3* matrix);
 
 /// One pair as a soft constraint: r = sum_i coefficients[i] x_{nodes[i]} (count distinct nodes).
 struct ContactTerm {
@@ -394,7 +393,7 @@ void SurfaceContact::for_each_friction(const Points& at, Visit&& visit) const {
     for (int a = 0; a < f.term.count; ++a) u += f.term.coefficients[a] * at.row(f.term.nodes[a]).transpose();
     Vec3 g;
     Mat3 matrix;
-    const double energy = lagged_friction(u, f.normal, f.normal_force, settings_.friction, eps, &g, &matrix);
+    const double energy = friction_energy(u, f.normal, f.normal_force, settings_.friction, eps, &g, &matrix);
     visit(f.term, energy, g, matrix);
   }
 }
