@@ -773,9 +773,19 @@ double SurfaceContact::max_step(const Points& from, const double* direction) {
     }
     // g is linear along the step: stop where all but kKeepShare of what was left of the
     // allowance is used up.
-    if (rate < 0) t_guard = std::min(t_guard, std::max(0.0, (1 - kKeepShare) * (g + delta) / -rate));
+    if (rate < 0) t_guard = std::min(t_guard, std::max(0.0, (1 - kKeepShare) * (g - guard.zero + delta) / -rate));
   }
   return std::min(t_guard, share * *std::min_element(smallest.begin(), smallest.end()));
+}
+
+double SurfaceContact::guard_zero(const std::array<Index, 4>& corner, const std::array<double, 4>& w, Index t0, Index t1,
+                                  Index t2) const {
+  const Vec3 rest_normal = unit_normal(rest_y_.row(t0).transpose(), rest_y_.row(t1).transpose(), rest_y_.row(t2).transpose(), settings_.thickness);
+  const double slack = kGuardSlack * guard_allowance();
+  if (rest_normal.isZero()) return -slack;
+  Vec3 r = Vec3::Zero();
+  for (int i = 0; i < 4; ++i) r += w[i] * rest_y_.row(corner[i]).transpose();
+  return std::min(0.0, rest_normal.dot(r)) - slack;
 }
 
 void SurfaceContact::lag_guards(const Points& start) {
@@ -790,6 +800,7 @@ void SurfaceContact::lag_guards(const Points& start) {
     std::size_t k;  // the candidate
     std::array<double, 3> beta;
     Vec3 normal;
+    double zero;
   };
   std::vector<Found> found;
   for (std::size_t k = 0; k < candidates_.size(); ++k) {
@@ -814,9 +825,11 @@ void SurfaceContact::lag_guards(const Points& start) {
     const double beta_b = cross.dot(ap.cross(q - a)) / area2, beta_c = cross.dot((b - a).cross(ap)) / area2;
     const double beta_a = 1 - beta_b - beta_c;
     if (std::min({beta_a, beta_b, beta_c}) < -kBeside) continue;
-    const double g = normal.dot(p - (beta_a * a + beta_b * b + beta_c * q));
+    const double zero = guard_zero({corner[0], corner[1], corner[2], corner[3]}, {1, -beta_a, -beta_b, -beta_c}, corner[1], corner[2],
+                                   corner[3]);
+    const double g = normal.dot(p - (beta_a * a + beta_b * b + beta_c * q)) - zero;
     if (!(g > -delta)) continue;  // already behind: nothing a guard could hold
-    found.push_back({corner[0], std::min({beta_a, beta_b, beta_c}), k, {beta_a, beta_b, beta_c}, normal});
+    found.push_back({corner[0], std::min({beta_a, beta_b, beta_c}), k, {beta_a, beta_b, beta_c}, normal, zero});
   }
   // One guard per vertex and plane: a vertex facing a fan of coplanar triangles (the other side
   // of its cut polygon) needs one, by the triangle it lies most inside; its planes differ only
@@ -836,7 +849,7 @@ void SurfaceContact::lag_guards(const Points& start) {
       if (same_plane) continue;
       collision::Proximity foot;
       foot.w = {1.0, -found[j].beta[0], -found[j].beta[1], -found[j].beta[2]};
-      guards_.push_back({term(candidates_[found[j].k], foot), found[j].normal});
+      guards_.push_back({term(candidates_[found[j].k], foot), found[j].normal, found[j].zero});
       guard_vertex.push_back(found[j].vertex);
     }
     i = end;
@@ -875,12 +888,13 @@ void SurfaceContact::lag_guards(const Points& start) {
         }
         const Vec3 normal = unit_normal(y_.row(tri[0]).transpose(), y_.row(tri[1]).transpose(), y_.row(tri[2]).transpose(), dhat);
         if (normal.isZero()) continue;
-        if (!(sign * normal.dot(p.r) > -delta)) continue;  // already behind
-        // Both ends held to this plane by their own guards hold the edge (g is linear along it).
-        if (held(corner[static_cast<std::size_t>(first)], normal) && held(corner[static_cast<std::size_t>(first) + 1], normal)) continue;
         collision::Proximity foot = p;
         for (double& w : foot.w) w *= sign;
-        guards_.push_back({term(c, foot), normal});
+        const double zero = guard_zero(corner, foot.w, tri[0], tri[1], tri[2]);
+        if (!(sign * normal.dot(p.r) - zero > -delta)) continue;  // already behind
+        // Both ends held to this plane by their own guards hold the edge (g is linear along it).
+        if (held(corner[static_cast<std::size_t>(first)], normal) && held(corner[static_cast<std::size_t>(first) + 1], normal)) continue;
+        guards_.push_back({term(c, foot), normal, zero});
       }
     }
   }

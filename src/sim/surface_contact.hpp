@@ -52,7 +52,13 @@
 // is linear in the nodes and the term is exact with a positive semi-definite Hessian. Its zero
 // is the fresh cut itself (g = 0), and the allowance delta = dhat / 10 is how far one side may be
 // pressed into the other; conservative advancement keeps every guard's g above -delta in the
-// line search, as it keeps the pairs' distances above 0. Triangles too flat for a normal (height
+// line search, as it keeps the pairs' distances above 0. A guard's g is measured from where its
+// pair lay in the material when that was behind the plane, less a millionth of the allowance, so
+// that no guard pushes at rest: where two cuts meet, a side's rim is triangulated apart from the
+// other side's faces, and some edge pairs lay up to 0.66 of the allowance behind (13 guards on
+// 36 sticks, which pushed them along the cuts from the first step, in free fall), and the sides
+// that coincide up to rounding loaded 33k guards there at a billionth of the allowance, a matrix
+// block each. Triangles too flat for a normal (height
 // below 1e-6 of their longest edge, or of dhat: fans over collinear points) guard nothing.
 // Edges too: every edge-edge pair of joined copies within dhat whose one edge lies on a face that
 // a face around the other edge's corners faces gets the same guard on the vector between their
@@ -309,7 +315,14 @@ class SurfaceContact {
   struct Guard {
     ContactTerm term;
     Vec3 normal;
+    double zero;  // where the barrier starts: the pair's g in the material if behind, less the slack
   };
+  /// A guard's zero: its g in the material where the pair lay behind the plane there (the rims of
+  /// cuts that meet at a junction, whose faces were triangulated apart), so that no guard pushes
+  /// at rest; less kGuardSlack of the allowance, so that sides that coincide up to rounding load
+  /// none. The guard's term is r = sum_i w_i corner_i, its plane that of triangle (t0, t1, t2).
+  double guard_zero(const std::array<Index, 4>& corner, const std::array<double, 4>& w, Index t0, Index t1, Index t2) const;
+  static constexpr double kGuardSlack = 1e-6;
   std::vector<Guard> guards_;
   bool sutures_changed_ = false;
   Points rest_y_;
@@ -373,7 +386,7 @@ void SurfaceContact::for_each_active(const Points& at, Visit&& visit) {
   for (const Guard& guard : guards_) {
     Vec3 r = Vec3::Zero();
     for (int a = 0; a < guard.term.count; ++a) r += guard.term.coefficients[a] * at.row(guard.term.nodes[a]).transpose();
-    const double g = guard.normal.dot(r);
+    const double g = guard.normal.dot(r) - guard.zero;
     if (g >= 0) continue;
     if (!(g + delta > 0)) {
       visit(guard.term, std::numeric_limits<double>::infinity(), Vec3::Zero().eval(), Mat3::Zero().eval());
