@@ -18,7 +18,9 @@ bool triangles_intersect(const std::array<Vec3, 3>& a, const std::array<Vec3, 3>
 struct SurfaceIntersections {
   Index intersecting_pairs = 0;  ///< pairs of triangles of different copies that intersect
   Index candidate_pairs = 0;     ///< pairs of different copies whose boxes meet (tested, or excluded)
-  Index degenerate_triangles = 0;  ///< triangles with collinear corners where they are now: not tested
+  /// Triangles with collinear corners where they are now or in the material (bounding no
+  /// material: a sliver, or two corners at one material point embedded twice): not tested.
+  Index degenerate_triangles = 0;
   /// Up to 16 intersecting pairs (triangle ids, the smaller first), in increasing order.
   std::vector<std::array<Index, 2>> examples;
 };

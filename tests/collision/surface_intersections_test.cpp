@@ -8,6 +8,8 @@
 
 #include <gtest/gtest.h>
 
+#include <limits>
+
 namespace tetcut {
 namespace {
 
@@ -147,6 +149,27 @@ TEST(SurfaceIntersections, AFacePressedAcrossARimCountsByHowFarFromTheRimsItCros
   EXPECT_EQ(t.crossing(pressed(kPressed), 2 * kPressed), 0);
   EXPECT_EQ(t.crossing(pressed(kPressed), kPressed / 2), 1);
   EXPECT_EQ(t.crossing(pressed(0.1), 2 * kPressed), 1);
+}
+
+// A sliver of the material surface: two of its corners are one material point, embedded twice
+// (in two copies sharing the nodes it hangs on, with weights an ulp apart). Placed, the two come
+// out an ulp apart and the sliver opens into a needle, here through a triangle of another copy:
+// no material there, not a crossing. Flat now, or in the material, a triangle is skipped.
+TEST(SurfaceIntersections, ASliverOfTheMaterialIsNotACrossingWhenItsTwinCornersPartByAnUlp) {
+  Eigen::Matrix<double, 6, 3, Eigen::RowMajor> corners;
+  corners << 0, 0, 0, 0, 0, 0, 1, 0, 0,  // the sliver: corners 0 and 1 one point, from x = 0 to 1
+      0.5, -1, -1, 0.5, 1, -1, 0.5, 0, 1;  // a triangle of another copy across it at x = 0.5
+  const TwoTriangles t(corners);
+  Points now = t.surface.surface.vertices;
+  now(1, 1) = 4 * std::numeric_limits<double>::epsilon();
+  now(1, 2) = 4 * std::numeric_limits<double>::epsilon();
+  const SurfaceIntersections r = count_surface_intersections(t.surface, t.copies, now);
+  EXPECT_EQ(r.intersecting_pairs, 0);
+  EXPECT_EQ(r.degenerate_triangles, 1);
+  // The same needle with a rest shape of its own (not flat in the material) is a crossing.
+  TwoTriangles solid(corners);
+  solid.surface.surface.vertices.row(1) = Eigen::RowVector3d(0, 0.1, 0.1);
+  EXPECT_EQ(count_surface_intersections(solid.surface, solid.copies, now).intersecting_pairs, 1);
 }
 
 // One piece: an incision x = 0.5 from the top down to z = 0.3. Its right lip, pushed left far
