@@ -549,11 +549,16 @@ void SurfaceContact::rebuild(double rho) {
     const auto consider = [&](Candidate c) {
       const std::array<Index, 4> k = corners(c);
       const bool shared = c.edges ? (k[0] == k[2] || k[0] == k[3] || k[1] == k[2] || k[1] == k[3]) : (k[0] == k[1] || k[0] == k[2] || k[0] == k[3]);
+      if (shared) return;
       const double now = proximity(c, y).distance;
-      if (shared || !(now <= rho)) return;
+      if (!(now <= rho)) return;
       // A pair touching now counts as touching in the material too: joined, it is left out (the
       // barrier is infinite at distance 0), as the joins of surfaces touching from the start are.
-      const double rest = proximity(c, rest_y_).distance;
+      // Only closeness within dhat matters there: a pair whose boxes lay farther apart is not
+      // measured (a piece sliding along a cut meets primitives far from its own in the material).
+      const std::array<Vec3, 4> at_rest = corner_positions(c, rest_y_);
+      const double rest = gap_between(at_rest, c.edges) < settings_.thickness ? proximity_at(at_rest, c.edges).distance
+                                                                                : std::numeric_limits<double>::infinity();
       c.rest_close = rest < settings_.thickness || !(now > 0) ? 1 : 0;
       c.rest_touching = rest < guard_allowance() || !(now > 0) || (c.rest_close && across_one_cut(c)) ? 1 : 0;
       out.push_back(c);
@@ -802,35 +807,44 @@ void SurfaceContact::lag_guards(const Points& start) {
     Vec3 normal;
     double zero;
   };
+  // Both scans below run in parallel over fixed chunks of the candidates, their findings joined
+  // in chunk order: the guards do not depend on the number of threads.
+  const auto K = static_cast<Index>(candidates_.size());
+  const auto chunks = static_cast<std::size_t>((K + kNodeChunk - 1) / kNodeChunk);
+  std::vector<std::vector<Found>> found_in(chunks);
+  for_chunks(K, kNodeChunk, [&](Index begin, Index end, Index chunk) {
+    for (Index k = begin; k < end; ++k) {
+      const Candidate& c = candidates_[k];
+      if (!c.joined || c.sutured || c.edges || !(proximities_[k].distance < dhat)) continue;
+      const std::array<Index, 4> corner = corners(c);
+      const Vec3 p = y_.row(corner[0]).transpose(), a = y_.row(corner[1]).transpose(), b = y_.row(corner[2]).transpose(),
+                 q = y_.row(corner[3]).transpose();
+      // Only a vertex whose surface faces the triangle in the material: the other side of the cut
+      // (one of the vertex's triangles turned against the triangle's), not a neighbour of the
+      // triangle on its own side, which may lie beside it and below its plane.
+      const Vec3& facing = rest_normals_[static_cast<std::size_t>(c.b)];
+      if (facing.isZero() || !vertex_faces(corner[0], facing)) continue;
+      const Vec3 normal = unit_normal(a, b, q, dhat);  // outward: the triangle's material is behind it
+      if (normal.isZero()) continue;
+      const Vec3 cross = (b - a).cross(q - a);
+      const double area2 = cross.squaredNorm();
+      // The vertex's foot on the triangle's plane in barycentric coordinates, also where it lies
+      // beside the triangle (within dhat of it): on the rim of a cut, where both sides bulge as
+      // they are pressed together, a vertex slips past the edge of the triangles it lay on.
+      const Vec3 ap = p - a;
+      const double beta_b = cross.dot(ap.cross(q - a)) / area2, beta_c = cross.dot((b - a).cross(ap)) / area2;
+      const double beta_a = 1 - beta_b - beta_c;
+      if (std::min({beta_a, beta_b, beta_c}) < -kBeside) continue;
+      const double zero = guard_zero({corner[0], corner[1], corner[2], corner[3]}, {1, -beta_a, -beta_b, -beta_c}, corner[1], corner[2],
+                                     corner[3]);
+      const double g = normal.dot(p - (beta_a * a + beta_b * b + beta_c * q)) - zero;
+      if (!(g > -delta)) continue;  // already behind: nothing a guard could hold
+      found_in[static_cast<std::size_t>(chunk)].push_back(
+          {corner[0], std::min({beta_a, beta_b, beta_c}), static_cast<std::size_t>(k), {beta_a, beta_b, beta_c}, normal, zero});
+    }
+  });
   std::vector<Found> found;
-  for (std::size_t k = 0; k < candidates_.size(); ++k) {
-    const Candidate& c = candidates_[k];
-    if (!c.joined || c.sutured || c.edges || !(proximities_[k].distance < dhat)) continue;
-    const std::array<Index, 4> corner = corners(c);
-    const Vec3 p = y_.row(corner[0]).transpose(), a = y_.row(corner[1]).transpose(), b = y_.row(corner[2]).transpose(),
-               q = y_.row(corner[3]).transpose();
-    // Only a vertex whose surface faces the triangle in the material: the other side of the cut
-    // (one of the vertex's triangles turned against the triangle's), not a neighbour of the
-    // triangle on its own side, which may lie beside it and below its plane.
-    const Vec3& facing = rest_normals_[static_cast<std::size_t>(c.b)];
-    if (facing.isZero() || !vertex_faces(corner[0], facing)) continue;
-    const Vec3 normal = unit_normal(a, b, q, dhat);  // outward: the triangle's material is behind it
-    if (normal.isZero()) continue;
-    const Vec3 cross = (b - a).cross(q - a);
-    const double area2 = cross.squaredNorm();
-    // The vertex's foot on the triangle's plane in barycentric coordinates, also where it lies
-    // beside the triangle (within dhat of it): on the rim of a cut, where both sides bulge as
-    // they are pressed together, a vertex slips past the edge of the triangles it lay on.
-    const Vec3 ap = p - a;
-    const double beta_b = cross.dot(ap.cross(q - a)) / area2, beta_c = cross.dot((b - a).cross(ap)) / area2;
-    const double beta_a = 1 - beta_b - beta_c;
-    if (std::min({beta_a, beta_b, beta_c}) < -kBeside) continue;
-    const double zero = guard_zero({corner[0], corner[1], corner[2], corner[3]}, {1, -beta_a, -beta_b, -beta_c}, corner[1], corner[2],
-                                   corner[3]);
-    const double g = normal.dot(p - (beta_a * a + beta_b * b + beta_c * q)) - zero;
-    if (!(g > -delta)) continue;  // already behind: nothing a guard could hold
-    found.push_back({corner[0], std::min({beta_a, beta_b, beta_c}), k, {beta_a, beta_b, beta_c}, normal, zero});
-  }
+  for (const std::vector<Found>& part : found_in) found.insert(found.end(), part.begin(), part.end());
   // One guard per vertex and plane: a vertex facing a fan of coplanar triangles (the other side
   // of its cut polygon) needs one, by the triangle it lies most inside; its planes differ only
   // where cuts or faces meet. Fewer terms, the same constraint: g is the same on coplanar
@@ -868,36 +882,41 @@ void SurfaceContact::lag_guards(const Points& start) {
     }
     return false;
   };
-  for (std::size_t k = 0; k < candidates_.size(); ++k) {
-    const Candidate& c = candidates_[k];
-    if (!c.joined || c.sutured || !c.edges || !(proximities_[k].distance < dhat)) continue;
-    const collision::Proximity& p = proximities_[k];
-    const std::array<Index, 4> corner = corners(c);
-    // The faces of edge (k0, k1), turned against a face around the other edge's corners; sign +1
-    // when the faces are the second edge's (r points from them to the first edge), -1 otherwise.
-    for (const auto& [first, second, sign] : {std::tuple{0, 2, 1.0}, std::tuple{2, 0, -1.0}}) {
-      const Index a = corner[static_cast<std::size_t>(second)], b = corner[static_cast<std::size_t>(second) + 1];
-      for (Index i = vertex_triangle_start_[a]; i < vertex_triangle_start_[a + 1]; ++i) {
-        const Index t = vertex_triangles_[i];
-        const auto& tri = triangles_[static_cast<std::size_t>(t)];
-        if (std::find(tri.begin(), tri.end(), b) == tri.end()) continue;
-        const Vec3& facing = rest_normals_[static_cast<std::size_t>(t)];
-        if (facing.isZero() || !(vertex_faces(corner[static_cast<std::size_t>(first)], facing) ||
-                                 vertex_faces(corner[static_cast<std::size_t>(first) + 1], facing))) {
-          continue;
+  std::vector<std::vector<Guard>> guards_in(chunks);
+  for_chunks(K, kNodeChunk, [&](Index begin, Index end, Index chunk) {
+    std::vector<Guard>& out = guards_in[static_cast<std::size_t>(chunk)];
+    for (Index k = begin; k < end; ++k) {
+      const Candidate& c = candidates_[k];
+      if (!c.joined || c.sutured || !c.edges || !(proximities_[k].distance < dhat)) continue;
+      const collision::Proximity& p = proximities_[k];
+      const std::array<Index, 4> corner = corners(c);
+      // The faces of edge (k0, k1), turned against a face around the other edge's corners; sign +1
+      // when the faces are the second edge's (r points from them to the first edge), -1 otherwise.
+      for (const auto& [first, second, sign] : {std::tuple{0, 2, 1.0}, std::tuple{2, 0, -1.0}}) {
+        const Index a = corner[static_cast<std::size_t>(second)], b = corner[static_cast<std::size_t>(second) + 1];
+        for (Index i = vertex_triangle_start_[a]; i < vertex_triangle_start_[a + 1]; ++i) {
+          const Index t = vertex_triangles_[i];
+          const auto& tri = triangles_[static_cast<std::size_t>(t)];
+          if (std::find(tri.begin(), tri.end(), b) == tri.end()) continue;
+          const Vec3& facing = rest_normals_[static_cast<std::size_t>(t)];
+          if (facing.isZero() || !(vertex_faces(corner[static_cast<std::size_t>(first)], facing) ||
+                                   vertex_faces(corner[static_cast<std::size_t>(first) + 1], facing))) {
+            continue;
+          }
+          const Vec3 normal = unit_normal(y_.row(tri[0]).transpose(), y_.row(tri[1]).transpose(), y_.row(tri[2]).transpose(), dhat);
+          if (normal.isZero()) continue;
+          collision::Proximity foot = p;
+          for (double& w : foot.w) w *= sign;
+          const double zero = guard_zero(corner, foot.w, tri[0], tri[1], tri[2]);
+          if (!(sign * normal.dot(p.r) - zero > -delta)) continue;  // already behind
+          // Both ends held to this plane by their own guards hold the edge (g is linear along it).
+          if (held(corner[static_cast<std::size_t>(first)], normal) && held(corner[static_cast<std::size_t>(first) + 1], normal)) continue;
+          out.push_back({term(c, foot), normal, zero});
         }
-        const Vec3 normal = unit_normal(y_.row(tri[0]).transpose(), y_.row(tri[1]).transpose(), y_.row(tri[2]).transpose(), dhat);
-        if (normal.isZero()) continue;
-        collision::Proximity foot = p;
-        for (double& w : foot.w) w *= sign;
-        const double zero = guard_zero(corner, foot.w, tri[0], tri[1], tri[2]);
-        if (!(sign * normal.dot(p.r) - zero > -delta)) continue;  // already behind
-        // Both ends held to this plane by their own guards hold the edge (g is linear along it).
-        if (held(corner[static_cast<std::size_t>(first)], normal) && held(corner[static_cast<std::size_t>(first) + 1], normal)) continue;
-        guards_.push_back({term(c, foot), normal, zero});
       }
     }
-  }
+  });
+  for (const std::vector<Guard>& part : guards_in) guards_.insert(guards_.end(), part.begin(), part.end());
 }
 
 void SurfaceContact::update_joins(const Points& at) {

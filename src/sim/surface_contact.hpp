@@ -199,7 +199,7 @@ class SurfaceContact {
   /// and not behind it by more than the allowance, with the triangle's normal and the vertex's
   /// foot on it held for the step; and each edge-edge pair of joined copies within dhat with one
   /// edge on a face the other's faces face, unless both ends of that edge are guarded against the
-  /// plane already (see "Guards" above). O(candidates).
+  /// plane already (see "Guards" above). O(candidates), in parallel.
   void lag_guards(const Points& start);
   Index num_guards() const { return static_cast<Index>(guards_.size()); }
   /// The allowance: how far behind its guard's triangle a vertex may go (a tenth of dhat).
