@@ -56,6 +56,16 @@ double sum_chunks(Index count, Index chunk, std::vector<double>* partial, const 
   return total;
 }
 
+/// Calls body(begin, end, out) over the fixed chunks of [0, count), in parallel, each chunk
+/// appending its findings to a vector `out` of its own, and appends those to *into in chunk
+/// order: the result does not depend on the number of threads.
+template <typename T, typename Body>
+void append_chunks(Index count, Index chunk, std::vector<T>* into, const Body& body) {
+  std::vector<std::vector<T>> found(static_cast<std::size_t>((count + chunk - 1) / chunk));
+  for_chunks(count, chunk, [&](Index begin, Index end, Index c) { body(begin, end, &found[static_cast<std::size_t>(c)]); });
+  for (const std::vector<T>& part : found) into->insert(into->end(), part.begin(), part.end());
+}
+
 class BlockSparseMatrix {
  public:
   /// The pattern in which every two nodes of a tet, and every two of the `extra` groups (eight

@@ -78,6 +78,16 @@ collision::Proximity proximity_at(const std::array<Vec3, 4>& y, bool edges) {
   return edges ? collision::segment_segment(y[0], y[1], y[2], y[3]) : collision::point_triangle(y[0], y[1], y[2], y[3]);
 }
 
+// The same into *p where the boxes come within `reach` of each other; beyond, only p's distance,
+// set to infinity (the readers ask only whether a pair is within reach).
+void measure_within(const std::array<Vec3, 4>& y, bool edges, double reach, collision::Proximity* p) {
+  if (gap_between(y, edges) < reach) {
+    *p = proximity_at(y, edges);
+  } else {
+    p->distance = std::numeric_limits<double>::infinity();
+  }
+}
+
 std::uint64_t copy_pair(Index a, Index b) {
   const auto lo = static_cast<std::uint64_t>(std::min(a, b)), hi = static_cast<std::uint64_t>(std::max(a, b));
   return lo << 32 | hi;
@@ -434,12 +444,7 @@ void SurfaceContact::measure(Measure which) {
         proximities_[k].distance = std::numeric_limits<double>::infinity();
         continue;
       }
-      const std::array<Vec3, 4> at = corner_positions(c, y_);
-      if (gap_between(at, c.edges) < settings_.thickness) {
-        proximities_[k] = proximity_at(at, c.edges);
-      } else {
-        proximities_[k].distance = std::numeric_limits<double>::infinity();
-      }
+      measure_within(corner_positions(c, y_), c.edges, settings_.thickness, &proximities_[k]);
     }
   });
 }
@@ -541,11 +546,9 @@ void SurfaceContact::rebuild(double rho) {
   // Per fixed chunk of pairs, joined in chunk order: the pairs are in (g, h) order, and so are
   // the candidates.
   constexpr Index kChunk = 64;
-  const auto P = static_cast<Index>(copy_pairs_.size());
-  const Index chunks = (P + kChunk - 1) / kChunk;
-  std::vector<std::vector<Candidate>> found(static_cast<std::size_t>(chunks));
-  for_chunks(P, kChunk, [&](Index begin, Index end, Index chunk) {
-    std::vector<Candidate>& out = found[static_cast<std::size_t>(chunk)];
+  candidates_.clear();
+  append_chunks(static_cast<Index>(copy_pairs_.size()), kChunk, &candidates_, [&](Index begin, Index end, std::vector<Candidate>* found) {
+    std::vector<Candidate>& out = *found;
     const auto consider = [&](Candidate c) {
       const std::array<Index, 4> k = corners(c);
       const bool shared = c.edges ? (k[0] == k[2] || k[0] == k[3] || k[1] == k[2] || k[1] == k[3]) : (k[0] == k[1] || k[0] == k[2] || k[0] == k[3]);
@@ -556,11 +559,10 @@ void SurfaceContact::rebuild(double rho) {
       // barrier is infinite at distance 0), as the joins of surfaces touching from the start are.
       // Only closeness within dhat matters there: a pair whose boxes lay farther apart is not
       // measured (a piece sliding along a cut meets primitives far from its own in the material).
-      const std::array<Vec3, 4> at_rest = corner_positions(c, rest_y_);
-      const double rest = gap_between(at_rest, c.edges) < settings_.thickness ? proximity_at(at_rest, c.edges).distance
-                                                                                : std::numeric_limits<double>::infinity();
-      c.rest_close = rest < settings_.thickness || !(now > 0) ? 1 : 0;
-      c.rest_touching = rest < guard_allowance() || !(now > 0) || (c.rest_close && across_one_cut(c)) ? 1 : 0;
+      collision::Proximity rest;
+      measure_within(corner_positions(c, rest_y_), c.edges, settings_.thickness, &rest);
+      c.rest_close = rest.distance < settings_.thickness || !(now > 0) ? 1 : 0;
+      c.rest_touching = rest.distance < guard_allowance() || !(now > 0) || (c.rest_close && across_one_cut(c)) ? 1 : 0;
       out.push_back(c);
     };
     // The primitives of one copy that reach another's box, with their boxes: most pairs of nearby
@@ -616,8 +618,6 @@ void SurfaceContact::rebuild(double rho) {
       primitive_pairs(edge_start_, group_edges_, edge_box, &near_edges_g, edge_start_, group_edges_, edge_box, &near_edges_h, g, h, 1, key);
     }
   });
-  candidates_.clear();
-  for (const auto& chunk : found) candidates_.insert(candidates_.end(), chunk.begin(), chunk.end());
   mark_joined();
 }
 
@@ -810,9 +810,8 @@ void SurfaceContact::lag_guards(const Points& start) {
   // Both scans below run in parallel over fixed chunks of the candidates, their findings joined
   // in chunk order: the guards do not depend on the number of threads.
   const auto K = static_cast<Index>(candidates_.size());
-  const auto chunks = static_cast<std::size_t>((K + kNodeChunk - 1) / kNodeChunk);
-  std::vector<std::vector<Found>> found_in(chunks);
-  for_chunks(K, kNodeChunk, [&](Index begin, Index end, Index chunk) {
+  std::vector<Found> found;
+  append_chunks(K, kNodeChunk, &found, [&](Index begin, Index end, std::vector<Found>* out) {
     for (Index k = begin; k < end; ++k) {
       const Candidate& c = candidates_[k];
       if (!c.joined || c.sutured || c.edges || !(proximities_[k].distance < dhat)) continue;
@@ -839,12 +838,9 @@ void SurfaceContact::lag_guards(const Points& start) {
                                      corner[3]);
       const double g = normal.dot(p - (beta_a * a + beta_b * b + beta_c * q)) - zero;
       if (!(g > -delta)) continue;  // already behind: nothing a guard could hold
-      found_in[static_cast<std::size_t>(chunk)].push_back(
-          {corner[0], std::min({beta_a, beta_b, beta_c}), static_cast<std::size_t>(k), {beta_a, beta_b, beta_c}, normal, zero});
+      out->push_back({corner[0], std::min({beta_a, beta_b, beta_c}), static_cast<std::size_t>(k), {beta_a, beta_b, beta_c}, normal, zero});
     }
   });
-  std::vector<Found> found;
-  for (const std::vector<Found>& part : found_in) found.insert(found.end(), part.begin(), part.end());
   // One guard per vertex and plane: a vertex facing a fan of coplanar triangles (the other side
   // of its cut polygon) needs one, by the triangle it lies most inside; its planes differ only
   // where cuts or faces meet. Fewer terms, the same constraint: g is the same on coplanar
@@ -882,9 +878,7 @@ void SurfaceContact::lag_guards(const Points& start) {
     }
     return false;
   };
-  std::vector<std::vector<Guard>> guards_in(chunks);
-  for_chunks(K, kNodeChunk, [&](Index begin, Index end, Index chunk) {
-    std::vector<Guard>& out = guards_in[static_cast<std::size_t>(chunk)];
+  append_chunks(K, kNodeChunk, &guards_, [&](Index begin, Index end, std::vector<Guard>* out) {
     for (Index k = begin; k < end; ++k) {
       const Candidate& c = candidates_[k];
       if (!c.joined || c.sutured || !c.edges || !(proximities_[k].distance < dhat)) continue;
@@ -911,12 +905,11 @@ void SurfaceContact::lag_guards(const Points& start) {
           if (!(sign * normal.dot(p.r) - zero > -delta)) continue;  // already behind
           // Both ends held to this plane by their own guards hold the edge (g is linear along it).
           if (held(corner[static_cast<std::size_t>(first)], normal) && held(corner[static_cast<std::size_t>(first) + 1], normal)) continue;
-          out.push_back({term(c, foot), normal, zero});
+          out->push_back({term(c, foot), normal, zero});
         }
       }
     }
   });
-  for (const std::vector<Guard>& part : guards_in) guards_.insert(guards_.end(), part.begin(), part.end());
 }
 
 void SurfaceContact::update_joins(const Points& at) {
