@@ -176,6 +176,8 @@ void SurfaceContact::clear_surface() {
   triangle_copy_.clear();
   edges_.clear();
   edge_copy_.clear();
+  vertex_listing_.clear();
+  edge_listing_.clear();
   copy_nodes_.clear();
   surface_nodes_.clear();
   candidates_.clear();
@@ -245,12 +247,24 @@ void SurfaceContact::set_surface(const MaterialSurface& surface, std::span<const
   }
   std::sort(sides.begin(), sides.end());
   double length = 0;
-  for (std::size_t i = 0; i < sides.size(); ++i) {
-    if (i > 0 && sides[i].first == sides[i - 1].first) continue;
+  edge_listing_.clear();
+  for (std::size_t i = 0; i < sides.size();) {
+    std::size_t end = i;
+    while (end < sides.size() && sides[end].first == sides[i].first) ++end;
     const auto a = static_cast<Index>(sides[i].first >> 32), b = static_cast<Index>(sides[i].first & 0xffffffffu);
+    const auto e = static_cast<Index>(edges_.size());
     edges_.push_back({a, b});
     edge_copy_.push_back(triangle_copy_[static_cast<std::size_t>(sides[i].second)]);
+    const std::size_t first_listing = edge_listing_.size();
+    for (std::size_t j = i; j < end; ++j) {
+      const Index copy = triangle_copy_[static_cast<std::size_t>(sides[j].second)];
+      if (std::none_of(edge_listing_.begin() + static_cast<std::ptrdiff_t>(first_listing), edge_listing_.end(),
+                       [&](const auto& listed) { return listed.first == copy; })) {
+        edge_listing_.emplace_back(copy, e);
+      }
+    }
     length += (s.vertices.row(a) - s.vertices.row(b)).norm();
+    i = end;
   }
   mean_edge_ = edges_.empty() ? 0.0 : length / static_cast<double>(edges_.size());
   // The defaults follow the surface (SurfaceContactOptions).
@@ -272,6 +286,18 @@ void SurfaceContact::set_surface(const MaterialSurface& surface, std::span<const
     std::vector<Index> fill(vertex_triangle_start_.begin(), vertex_triangle_start_.end() - 1);
     for (std::size_t t = 0; t < F; ++t) {
       for (const Index v : triangles_[t]) vertex_triangles_[static_cast<std::size_t>(fill[static_cast<std::size_t>(v)]++)] = static_cast<Index>(t);
+    }
+  }
+  vertex_listing_.clear();
+  for (std::size_t v = 0; v < V; ++v) {
+    const std::size_t first_listing = vertex_listing_.size();
+    vertex_listing_.emplace_back(vertex_copy_[v], static_cast<Index>(v));
+    for (Index i = vertex_triangle_start_[v]; i < vertex_triangle_start_[v + 1]; ++i) {
+      const Index copy = triangle_copy_[static_cast<std::size_t>(vertex_triangles_[i])];
+      if (std::none_of(vertex_listing_.begin() + static_cast<std::ptrdiff_t>(first_listing), vertex_listing_.end(),
+                       [&](const auto& listed) { return listed.first == copy; })) {
+        vertex_listing_.emplace_back(copy, static_cast<Index>(v));
+      }
     }
   }
   group_primitives();
@@ -318,17 +344,20 @@ void SurfaceContact::group_primitives() {
     return static_cast<Index>(std::lower_bound(group_copy_.begin(), group_copy_.end(), copy) - group_copy_.begin());
   };
   const auto G = static_cast<Index>(group_copy_.size());
-  const auto bucket = [&](const std::vector<Index>& owner, std::vector<Index>* start, std::vector<Index>* items) {
+  // Each copy's items in ascending order.
+  const auto bucket = [&](const std::vector<std::pair<Index, Index>>& listing, std::vector<Index>* start, std::vector<Index>* items) {
     start->assign(static_cast<std::size_t>(G) + 1, 0);
-    for (const Index copy : owner) ++(*start)[static_cast<std::size_t>(group_of(copy)) + 1];
+    for (const auto& [copy, item] : listing) ++(*start)[static_cast<std::size_t>(group_of(copy)) + 1];
     for (Index g = 0; g < G; ++g) (*start)[g + 1] += (*start)[g];
-    items->resize(owner.size());
+    items->resize(listing.size());
     std::vector<Index> fill(start->begin(), start->end() - 1);
-    for (std::size_t i = 0; i < owner.size(); ++i) (*items)[static_cast<std::size_t>(fill[static_cast<std::size_t>(group_of(owner[i]))]++)] = static_cast<Index>(i);
+    for (const auto& [copy, item] : listing) (*items)[static_cast<std::size_t>(fill[static_cast<std::size_t>(group_of(copy))]++)] = item;
   };
-  bucket(vertex_copy_, &vertex_start_, &group_vertices_);
-  bucket(triangle_copy_, &triangle_start_, &group_triangles_);
-  bucket(edge_copy_, &edge_start_, &group_edges_);
+  bucket(vertex_listing_, &vertex_start_, &group_vertices_);
+  std::vector<std::pair<Index, Index>> triangle_listing(triangle_copy_.size());
+  for (std::size_t t = 0; t < triangle_copy_.size(); ++t) triangle_listing[t] = {triangle_copy_[t], static_cast<Index>(t)};
+  bucket(triangle_listing, &triangle_start_, &group_triangles_);
+  bucket(edge_listing_, &edge_start_, &group_edges_);
   tree_built_ = false;
   pairs_radius_ = -1;
 }
@@ -549,7 +578,18 @@ void SurfaceContact::rebuild(double rho) {
   candidates_.clear();
   append_chunks(static_cast<Index>(copy_pairs_.size()), kChunk, &candidates_, [&](Index begin, Index end, std::vector<Candidate>* found) {
     std::vector<Candidate>& out = *found;
-    const auto consider = [&](Candidate c) {
+    const auto consider = [&](Candidate c, Index copy_a, Index copy_b) {
+      // A primitive listed by a copy other than its own: wanted here only where its own copy and
+      // the other primitive's neighbour each other (else the pair is found through those), and
+      // then perhaps found more than once (through each of its copies apart from the other's):
+      // kept once, below.
+      const Index own_a = c.edges ? edge_copy_[static_cast<std::size_t>(c.a)] : vertex_copy_[static_cast<std::size_t>(c.a)];
+      const Index own_b = c.edges ? edge_copy_[static_cast<std::size_t>(c.b)] : triangle_copy_[static_cast<std::size_t>(c.b)];
+      if (own_a != copy_a || own_b != copy_b) {
+        if (!neighbours(own_a, own_b)) return;
+        c.listed_apart = 1;
+        if (c.edges && c.b < c.a) std::swap(c.a, c.b);
+      }
       const std::array<Index, 4> k = corners(c);
       const bool shared = c.edges ? (k[0] == k[2] || k[0] == k[3] || k[1] == k[2] || k[1] == k[3]) : (k[0] == k[1] || k[0] == k[2] || k[0] == k[3]);
       if (shared) return;
@@ -569,10 +609,17 @@ void SurfaceContact::rebuild(double rho) {
     // copies have none (boxes of tets that share no node overlap often in a BCC lattice).
     using Near = std::vector<std::pair<Index, spatial::Aabb>>;
     Near near_vertices, near_triangles, near_edges_g, near_edges_h;
-    const auto gather = [&](const std::vector<Index>& start, const std::vector<Index>& items, Index g, const spatial::Aabb& reach,
-                            const auto& box_of, Near* into) {
+    // A vertex that copy g lists but does not own is wanted against copy h only where its own
+    // copy neighbours h (see consider); triangles are listed by their own copies only, and an
+    // edge's two copies are known only with the other edge.
+    const auto gather = [&](const std::vector<Index>& start, const std::vector<Index>& items, Index g, Index h, const spatial::Aabb& reach,
+                            const auto& box_of, bool vertices, Near* into) {
       into->clear();
       for (Index k = start[g]; k < start[g + 1]; ++k) {
+        if (vertices) {
+          const Index own = vertex_copy_[static_cast<std::size_t>(items[k])];
+          if (own != group_copy_[g] && !neighbours(own, group_copy_[h])) continue;
+        }
         const spatial::Aabb box = box_of(items[k]);
         if (reach.meets(box)) into->emplace_back(items[k], box);
       }
@@ -597,13 +644,13 @@ void SurfaceContact::rebuild(double rho) {
     const auto primitive_pairs = [&](const std::vector<Index>& start_g, const std::vector<Index>& items_g, const auto& box_g, Near* near_g,
                                      const std::vector<Index>& start_h, const std::vector<Index>& items_h, const auto& box_h, Near* near_h,
                                      Index g, Index h, std::uint8_t edges, std::uint64_t key) {
-      gather(start_g, items_g, g, box(h).grown(rho), box_g, near_g);
+      gather(start_g, items_g, g, h, box(h).grown(rho), box_g, edges == 0, near_g);
       if (near_g->empty()) return;
-      gather(start_h, items_h, h, box(g).grown(rho), box_h, near_h);
+      gather(start_h, items_h, h, g, box(g).grown(rho), box_h, false, near_h);
       for (const auto& [a, a_box] : *near_g) {
         const spatial::Aabb reach = a_box.grown(rho);
         for (const auto& [b, b_box] : *near_h) {
-          if (reach.meets(b_box)) consider({a, b, edges, 0, 0, 0, 0, key});
+          if (reach.meets(b_box)) consider({a, b, edges, 0, 0, 0, 0, 0, key}, group_copy_[g], group_copy_[h]);
         }
       }
     };
@@ -618,7 +665,27 @@ void SurfaceContact::rebuild(double rho) {
       primitive_pairs(edge_start_, group_edges_, edge_box, &near_edges_g, edge_start_, group_edges_, edge_box, &near_edges_h, g, h, 1, key);
     }
   });
+  // The pairs found through other copies last, each once (through the first of its copy pairs),
+  // so that the others keep their order. Rare: primitives on the rims between copies, near the
+  // surface of a copy that neighbours one of them (a slinky's coils, a tet apart in the material).
+  const auto apart = std::stable_partition(candidates_.begin(), candidates_.end(), [](const Candidate& c) { return !c.listed_apart; });
+  const auto same_pair = [](const Candidate& p, const Candidate& q) { return p.edges == q.edges && p.a == q.a && p.b == q.b; };
+  std::sort(apart, candidates_.end(), [](const Candidate& p, const Candidate& q) {
+    return std::tie(p.edges, p.a, p.b, p.copies) < std::tie(q.edges, q.a, q.b, q.copies);
+  });
+  candidates_.erase(std::unique(apart, candidates_.end(), same_pair), candidates_.end());
   mark_joined();
+}
+
+std::vector<std::array<Index, 3>> SurfaceContact::candidate_pairs(Index* listed_apart) const {
+  std::vector<std::array<Index, 3>> pairs;
+  pairs.reserve(candidates_.size());
+  if (listed_apart) *listed_apart = 0;
+  for (const Candidate& c : candidates_) {
+    pairs.push_back({c.edges, c.a, c.b});
+    if (listed_apart) *listed_apart += c.listed_apart;
+  }
+  return pairs;
 }
 
 void SurfaceContact::cover_copy_pairs(double rho) {

@@ -22,7 +22,12 @@
 //
 // Which pairs count. Excluded for good: pairs sharing a surface vertex, and pairs whose copies
 // are one copy or share a node (neighbours in the material, within a tet of each other: their
-// surfaces meet by construction). Excluded for a while: pairs of copies "joined across a cut",
+// surfaces meet by construction), where a vertex's copies are its own (the one it is embedded in)
+// and those of its triangles, an edge's those of its triangles: a pair counts if any of its
+// copies' pairs is apart, as the crossing check counts any pair of triangles of copies apart. (By
+// their own copies alone, a coil of Figure 8's slinky, thinner than a tet, shares nodes with the
+// next where one embeds a vertex, and 2.5k vertex-triangle pairs within dhat went unseen whose
+// triangles the check counted: the coils crossed in up to 32 pairs as they bunched.) Excluded for a while: pairs of copies "joined across a cut",
 // whose surfaces a cut has just made coincide (both sides of a fresh cut are at distance 0, where
 // the barrier is infinite), that touched in the material (within the guards' allowance delta, below;
 // or touched when the list was built), or lay there on the two sides of one cut, apart along it by
@@ -87,7 +92,8 @@
 //
 // Broad phase: per copy, a box around the primitives it owns (a vertex's copy, a triangle's, an
 // edge's first triangle's); pairs of copies whose boxes come within the radius rho, neighbours
-// left out, then their primitives against each other. Most primitives near a given one are in
+// left out, then their primitives against each other (and the primitives the copies' triangles
+// share with copies that neighbour the other copy: each such pair once). Most primitives near a given one are in
 // its own or neighbouring copies and never listed, so the work goes with the pairs of copies that
 // can really touch (per primitive queries were 100 times slower on a fine embedded surface). The
 // candidates (all pairs within rho at the reference positions) serve every evaluation whose
@@ -214,6 +220,10 @@ class SurfaceContact {
   void clear_sutures();
 
   Index num_candidates() const { return static_cast<Index>(candidates_.size()); }
+  /// The candidates as (edges, a, b): a vertex and a triangle (0), or two edges (1), by their
+  /// indices in edge_list(); and how many were found through a copy not their own. For checks.
+  std::vector<std::array<Index, 3>> candidate_pairs(Index* listed_apart = nullptr) const;
+  const std::vector<std::array<Index, 2>>& edge_list() const { return edges_; }
   Index num_joins() const { return static_cast<Index>(joins_.size()); }
   Index num_rebuilds() const { return rebuilds_; }
   /// How often the pairs of copies under the candidates were found again (see copy_pairs_).
@@ -230,6 +240,9 @@ class SurfaceContact {
     std::uint8_t rest_touching;  // within the guards' allowance in the material, or touching now, or
                                  // within dhat there on the two sides of one cut (across_one_cut)
     std::uint8_t sutured;     // rest_close between sutured copies (not counted)
+    // Found through a copy that is not its primitive's own (see group_primitives): a vertex or an
+    // edge whose own copy neighbours the other primitive's, listed by another copy around it.
+    std::uint8_t listed_apart;
     std::uint64_t copies;     // the copy pair, (min << 32) | max
   };
   /// Vertex v's share of the nodes' values: sum_i w_i node_value(n_i) over its copy's nodes (its
@@ -345,9 +358,12 @@ class SurfaceContact {
   // and the next step's start (the guards) measure the same positions.
   int measured_ = -1;
   double rho_ = -1;
-  // The primitives by the copy that owns them (CSR over group_copy_, the owning copies in
-  // ascending order), and a box hierarchy over each copy's primitives.
+  // The primitives by copy (CSR over group_copy_, the copies that own primitives, ascending), and
+  // a box hierarchy over each copy's primitives. A vertex is listed by its own copy and by the
+  // copies of its other triangles, an edge by the copies of all its triangles (its own, the
+  // first's, first): see group_primitives.
   std::vector<Index> group_copy_;
+  std::vector<std::pair<Index, Index>> vertex_listing_, edge_listing_;  // (copy, primitive), by primitive
   std::vector<Index> vertex_start_, group_vertices_, triangle_start_, group_triangles_, edge_start_, group_edges_;
   std::vector<spatial::Aabb> copy_boxes_;  // at reference_
   // A second, coarser list under the candidates: the pairs of copies (group indices g < h, not

@@ -11,10 +11,14 @@
 #include <tetcut/generators.hpp>
 #include <tetcut/sim.hpp>
 
+#include "collision/proximity.hpp"
+#include "geometry/predicates.hpp"
 #include "sim/surface_contact.hpp"
+#include "spatial/box_tree.hpp"
 
 #include <Eigen/Eigenvalues>
 
+#include <map>
 #include <numbers>
 #include <random>
 
@@ -382,6 +386,116 @@ TEST(SurfaceContact, NoGuardPushesAtRest) {
   EXPECT_GT(contact.num_guards(), 10000);
   EXPECT_EQ(active(&with_guards), pairs_energy);
   EXPECT_EQ(with_guards, pairs);
+}
+
+// Every pair of primitives that the crossing check would count between two triangles, when they
+// come within the thickness, is a candidate of contact. A slinky carved out of a coarse block
+// (Figure 8): its coils are thinner than a tet, so a copy of one coil shares nodes with copies of
+// the next, and a triangle of one coil is a neighbour of the copy that embeds a vertex of the next
+// coil while the triangle beside that vertex, in another copy, is not. Contact took each vertex
+// and edge by its own copy only and missed such pairs, which the check counts: the slinky's coils,
+// bunching as they sprang back, crossed in up to 32 pairs.
+TEST(SurfaceContact, APairTheCheckWouldCountIsACandidateWhateverCopyEmbedsItsCorners) {
+  Cutter cutter(make_grid({Vec3(-1, -1, 0), Vec3(1, 1, 2)}, {4, 4, 4}, 5));
+  cutter.cut(cylinder_side(Vec3(0, 0, 1), Vec3(0, 0, 1), 0.37, 3, 16));
+  cutter.cut(cylinder_side(Vec3(0, 0, 1), Vec3(0, 0, 1), 0.93, 3, 16));
+  cutter.cut(helical_ribbon(Vec3(0, 0, -0.1), Vec3(0, 0, 1), 0.2, 1.2, 0.42, 5.5, 16));
+  const CutResult result = cutter.result();
+  const MaterialSurface& surface = result.surface;
+  const auto& copies = cutter.tet_nodes();
+  const Points& rest = result.mesh.mesh.rest();
+  sim::detail::SurfaceContact contact;
+  const std::vector<std::uint8_t> changed(copies.size(), 1);
+  contact.set_surface(surface, copies, rest, rest, changed, sim::SurfaceContactOptions{}, soft().youngs_modulus);
+  const double dhat = contact.settings().thickness;
+  Index listed_apart = 0;
+  std::vector<std::array<Index, 3>> listed = contact.candidate_pairs(&listed_apart);
+  for (auto& pair : listed) {
+    if (pair[0] == 1 && pair[2] < pair[1]) std::swap(pair[1], pair[2]);
+  }
+  std::sort(listed.begin(), listed.end());
+  const auto is_listed = [&](Index edges, Index a, Index b) {
+    return std::binary_search(listed.begin(), listed.end(), std::array<Index, 3>{edges, std::min(a, b), std::max(a, b)}) ||
+           (edges == 0 && std::binary_search(listed.begin(), listed.end(), std::array<Index, 3>{0, a, b}));
+  };
+  const auto apart = [&](Index p, Index q) {
+    if (p == q) return false;
+    for (const Index n : copies[static_cast<std::size_t>(p)]) {
+      if (std::find(copies[static_cast<std::size_t>(q)].begin(), copies[static_cast<std::size_t>(q)].end(), n) != copies[static_cast<std::size_t>(q)].end()) {
+        return false;
+      }
+    }
+    return true;
+  };
+  const TriangleSurface& s = surface.surface;
+  const auto at = [&](Index v) { return Vec3(s.vertices.row(v).transpose()); };
+  // Each vertex's and edge's triangles' copies.
+  std::vector<std::vector<Index>> vertex_copies(static_cast<std::size_t>(s.num_vertices()));
+  std::map<std::pair<Index, Index>, std::vector<Index>> edge_copies;
+  std::vector<spatial::Aabb> boxes(static_cast<std::size_t>(s.num_triangles()));
+  for (Index t = 0; t < s.num_triangles(); ++t) {
+    const Index copy = surface.triangle_tet[static_cast<std::size_t>(t)];
+    for (int k = 0; k < 3; ++k) {
+      const Index v = s.triangles(t, k), w = s.triangles(t, (k + 1) % 3);
+      vertex_copies[static_cast<std::size_t>(v)].push_back(copy);
+      edge_copies[{std::min(v, w), std::max(v, w)}].push_back(copy);
+      boxes[static_cast<std::size_t>(t)].extend(at(v));
+    }
+  }
+  const std::vector<std::array<Index, 2>>& edges = contact.edge_list();
+  std::map<std::pair<Index, Index>, Index> edge_id;
+  for (std::size_t e = 0; e < edges.size(); ++e) edge_id[{std::min(edges[e][0], edges[e][1]), std::max(edges[e][0], edges[e][1])}] = static_cast<Index>(e);
+  ASSERT_EQ(edge_id.size(), edge_copies.size());
+  const spatial::BoxTree tree(boxes);
+  Index counted = 0, missing = 0;
+  std::vector<Index> near;
+  for (Index v = 0; v < s.num_vertices(); ++v) {
+    spatial::Aabb reach;
+    reach.extend(at(v));
+    near.clear();
+    tree.query(reach.grown(dhat), &near);
+    for (const Index t : near) {
+      const Index a = s.triangles(t, 0), b = s.triangles(t, 1), c = s.triangles(t, 2);
+      if (v == a || v == b || v == c || geometry::collinear(at(a), at(b), at(c))) continue;
+      const Index copy = surface.triangle_tet[static_cast<std::size_t>(t)];
+      const auto& mine = vertex_copies[static_cast<std::size_t>(v)];
+      if (std::none_of(mine.begin(), mine.end(), [&](Index c2) { return apart(c2, copy); })) continue;
+      if (!(collision::point_triangle(at(v), at(a), at(b), at(c)).distance < dhat)) continue;
+      ++counted;
+      if (!is_listed(0, v, t)) ++missing;
+    }
+  }
+  // Edges: pairs of edges within the thickness, sharing no vertex, with copies apart.
+  std::vector<spatial::Aabb> edge_boxes(edges.size());
+  for (std::size_t e = 0; e < edges.size(); ++e) {
+    edge_boxes[e].extend(at(edges[e][0]));
+    edge_boxes[e].extend(at(edges[e][1]));
+  }
+  const spatial::BoxTree edge_tree(edge_boxes);
+  Index counted_edges = 0, missing_edges = 0;
+  for (std::size_t e = 0; e < edges.size(); ++e) {
+    near.clear();
+    edge_tree.query(edge_boxes[e].grown(dhat), &near);
+    const auto& [p0, p1] = edges[e];
+    const auto& mine = edge_copies.at({std::min(p0, p1), std::max(p0, p1)});
+    for (const Index f : near) {
+      if (f <= static_cast<Index>(e)) continue;
+      const auto& [q0, q1] = edges[static_cast<std::size_t>(f)];
+      if (p0 == q0 || p0 == q1 || p1 == q0 || p1 == q1) continue;
+      const auto& theirs = edge_copies.at({std::min(q0, q1), std::max(q0, q1)});
+      if (std::none_of(mine.begin(), mine.end(), [&](Index c1) { return std::any_of(theirs.begin(), theirs.end(), [&](Index c2) { return apart(c1, c2); }); })) {
+        continue;
+      }
+      if (!(collision::segment_segment(at(p0), at(p1), at(q0), at(q1)).distance < dhat)) continue;
+      ++counted_edges;
+      if (!is_listed(1, static_cast<Index>(e), f)) ++missing_edges;
+    }
+  }
+  EXPECT_GT(counted, 1000);
+  EXPECT_GT(counted_edges, 1000);
+  EXPECT_GT(listed_apart, 0);
+  EXPECT_EQ(missing, 0) << "of " << counted << " vertex-triangle pairs";
+  EXPECT_EQ(missing_edges, 0) << "of " << counted_edges << " edge pairs";
 }
 
 // A Newton direction that flings one block 40 m away from the other (nothing in between): the step
