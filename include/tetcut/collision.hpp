@@ -45,7 +45,10 @@ struct SurfaceIntersections {
 ///   triangulations of a polygon overlap without always sharing a corner); and pairs that touch
 ///   in the material (decided exactly, or apart there by no more than `opened` or the rounding
 ///   of rest points, 64 ulps as above: surface contact leaves pairs within its allowance in the
-///   material out of its barrier, as touching) and now cross by at most `opened` (one reaches no further than
+///   material out of its barrier, as touching; or lying in one plane there, facing each other,
+///   anywhere along it: the two sides of a flat part of a cut, whose fans may put a corner of one
+///   a little beside the other's triangle, and which contact leaves out as lying across one cut
+///   when they are within its thickness) and now cross by at most `opened` (one reaches no further than
 ///   that behind the other, the material being behind each: the sides of a cut pressed
 ///   together, which slide along each other as each bulges; or, where they are not coplanar,
 ///   the segment where they cross lies within `opened` of both triangles' rims: a face that meets

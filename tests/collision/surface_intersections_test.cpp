@@ -151,6 +151,32 @@ TEST(SurfaceIntersections, AFacePressedAcrossARimCountsByHowFarFromTheRimsItCros
   EXPECT_EQ(t.crossing(pressed(0.1), 2 * kPressed), 1);
 }
 
+// The two sides of one flat cut (plane z = 0), apart along it in the material by more than the
+// allowance, as the sides' fans over the cut polygon can leave them (the folded flap's floor:
+// 0.0016 apart): the upper side (normal -z) slid 0.3 over the lower (normal +z), one corner
+// pressed into it by 1e-6, grazes it as two sides that touched would, and is not counted within an
+// allowance of 1e-4; pressed in by 1e-3, or turned out of the plane in the material (a wall), it is.
+TEST(SurfaceIntersections, TwoSidesOfOneCutApartAlongItCountOnlyPressedDeeperThanAllowed) {
+  constexpr double kGap = 0.0016;
+  Eigen::Matrix<double, 6, 3, Eigen::RowMajor> corners;
+  corners << 0, 0, 0, 0, 1, 0, 1, 0, 0,  // the upper side, normal -z
+      1 + kGap, 0, 0, 2, 0, 0, 1 + kGap, 1, 0;  // the lower side, normal +z
+  const TwoTriangles t(corners);
+  const auto slid = [&](double pressed) {
+    Points at = t.first_moved(Vec3(0.3, 0.05, 3 * pressed));  // tilted: it meets z = 0 at x = 1.05
+    at(2, 2) = -pressed;
+    return at;
+  };
+  EXPECT_EQ(t.crossing(t.surface.surface.vertices, 1e-4), 0);
+  EXPECT_EQ(t.crossing(slid(1e-6), 1e-4), 0);
+  EXPECT_EQ(t.crossing(slid(1e-3), 1e-4), 1);
+  // The lower triangle turned up by 0.01 in the material: not one plane with the upper.
+  Eigen::Matrix<double, 6, 3, Eigen::RowMajor> turned = corners;
+  turned(5, 2) = 0.01;
+  const TwoTriangles wall(turned);
+  EXPECT_EQ(wall.crossing(slid(1e-6), 1e-4), 1);
+}
+
 // A sliver of the material surface: two of its corners are one material point, embedded twice
 // (in two copies sharing the nodes it hangs on, with weights an ulp apart). Placed, the two come
 // out an ulp apart and the sliver opens into a needle, here through a triangle of another copy:
