@@ -174,8 +174,9 @@ SurfaceIntersections count_surface_intersections(const MaterialSurface& surface,
   const double scale = positions.size() > 0 ? positions.cwiseAbs().maxCoeff() : 0.0;
   const double rest_scale = s.vertices.size() > 0 ? s.vertices.cwiseAbs().maxCoeff() : 0.0;
   const double rounding = 64 * std::numeric_limits<double>::epsilon();
-  const std::vector<Index> weld =
-      collision::twin_ids(s.vertices, positions, std::max(rounding * rest_scale, std::numeric_limits<double>::min()), std::max(opened, rounding * scale));
+  // Two rest points closer than this are one material point, rounded differently by two copies.
+  const double rest_twin = std::max(rounding * rest_scale, std::numeric_limits<double>::min());
+  const std::vector<Index> weld = collision::twin_ids(s.vertices, positions, rest_twin, std::max(opened, rounding * scale));
   // Per vertex: still one point with another (unopened).
   std::vector<std::uint8_t> unopened(weld.size(), 0);
   for (std::size_t v = 0; v < weld.size(); ++v) {
@@ -236,8 +237,7 @@ SurfaceIntersections count_surface_intersections(const MaterialSurface& surface,
   // a needle in the material as well, whose plane, and so its crossing's depth, is rounding; its
   // long sides are its neighbours', which are tested (Figure 4's one crossing pair at 0.9 and
   // 1.3 s: a needle measured 1.1e-3 from the rims, its side crossing 2.6e-4 from them).
-  const double twin = std::max(rounding * rest_scale, std::numeric_limits<double>::min());
-  const auto twins = [&](const Vec3& p, const Vec3& q) { return (p - q).cwiseAbs().maxCoeff() <= twin; };
+  const auto twins = [&](const Vec3& p, const Vec3& q) { return (p - q).cwiseAbs().maxCoeff() <= rest_twin; };
   tbb::parallel_for(tbb::blocked_range<Index>(0, F, 1024), [&](const auto& range) {
     for (Index t = range.begin(); t != range.end(); ++t) {
       const auto c = corners(t);

@@ -176,8 +176,6 @@ void SurfaceContact::clear_surface() {
   triangle_copy_.clear();
   edges_.clear();
   edge_copy_.clear();
-  vertex_listing_.clear();
-  edge_listing_.clear();
   copy_nodes_.clear();
   surface_nodes_.clear();
   candidates_.clear();
@@ -246,8 +244,13 @@ void SurfaceContact::set_surface(const MaterialSurface& surface, std::span<const
     }
   }
   std::sort(sides.begin(), sides.end());
+  // Each primitive listed once by each copy around it, its own copy first.
+  const auto list_once = [](Listing* listing, std::size_t first, Index copy, Index primitive) {
+    const auto listed = [&](const auto& entry) { return entry.first == copy; };
+    if (std::none_of(listing->begin() + static_cast<std::ptrdiff_t>(first), listing->end(), listed)) listing->emplace_back(copy, primitive);
+  };
+  Listing edge_listing, vertex_listing;
   double length = 0;
-  edge_listing_.clear();
   for (std::size_t i = 0; i < sides.size();) {
     std::size_t end = i;
     while (end < sides.size() && sides[end].first == sides[i].first) ++end;
@@ -255,14 +258,8 @@ void SurfaceContact::set_surface(const MaterialSurface& surface, std::span<const
     const auto e = static_cast<Index>(edges_.size());
     edges_.push_back({a, b});
     edge_copy_.push_back(triangle_copy_[static_cast<std::size_t>(sides[i].second)]);
-    const std::size_t first_listing = edge_listing_.size();
-    for (std::size_t j = i; j < end; ++j) {
-      const Index copy = triangle_copy_[static_cast<std::size_t>(sides[j].second)];
-      if (std::none_of(edge_listing_.begin() + static_cast<std::ptrdiff_t>(first_listing), edge_listing_.end(),
-                       [&](const auto& listed) { return listed.first == copy; })) {
-        edge_listing_.emplace_back(copy, e);
-      }
-    }
+    const std::size_t first_listing = edge_listing.size();
+    for (std::size_t j = i; j < end; ++j) list_once(&edge_listing, first_listing, triangle_copy_[static_cast<std::size_t>(sides[j].second)], e);
     length += (s.vertices.row(a) - s.vertices.row(b)).norm();
     i = end;
   }
@@ -288,19 +285,14 @@ void SurfaceContact::set_surface(const MaterialSurface& surface, std::span<const
       for (const Index v : triangles_[t]) vertex_triangles_[static_cast<std::size_t>(fill[static_cast<std::size_t>(v)]++)] = static_cast<Index>(t);
     }
   }
-  vertex_listing_.clear();
   for (std::size_t v = 0; v < V; ++v) {
-    const std::size_t first_listing = vertex_listing_.size();
-    vertex_listing_.emplace_back(vertex_copy_[v], static_cast<Index>(v));
+    const std::size_t first_listing = vertex_listing.size();
+    list_once(&vertex_listing, first_listing, vertex_copy_[v], static_cast<Index>(v));
     for (Index i = vertex_triangle_start_[v]; i < vertex_triangle_start_[v + 1]; ++i) {
-      const Index copy = triangle_copy_[static_cast<std::size_t>(vertex_triangles_[i])];
-      if (std::none_of(vertex_listing_.begin() + static_cast<std::ptrdiff_t>(first_listing), vertex_listing_.end(),
-                       [&](const auto& listed) { return listed.first == copy; })) {
-        vertex_listing_.emplace_back(copy, static_cast<Index>(v));
-      }
+      list_once(&vertex_listing, first_listing, triangle_copy_[static_cast<std::size_t>(vertex_triangles_[i])], static_cast<Index>(v));
     }
   }
-  group_primitives();
+  group_primitives(vertex_listing, edge_listing);
   if (!enabled() || !(settings_.thickness > 0)) return;
 
   // Joins: the old ones of copies this cut left alone, and new ones where a changed copy's
@@ -332,7 +324,7 @@ void SurfaceContact::set_surface(const MaterialSurface& surface, std::span<const
   mark_joined();
 }
 
-void SurfaceContact::group_primitives() {
+void SurfaceContact::group_primitives(const Listing& vertices, const Listing& edges) {
   // The copies that own primitives, ascending, and each one's vertices, triangles and edges.
   group_copy_.clear();
   group_copy_.insert(group_copy_.end(), vertex_copy_.begin(), vertex_copy_.end());
@@ -345,7 +337,7 @@ void SurfaceContact::group_primitives() {
   };
   const auto G = static_cast<Index>(group_copy_.size());
   // Each copy's items in ascending order.
-  const auto bucket = [&](const std::vector<std::pair<Index, Index>>& listing, std::vector<Index>* start, std::vector<Index>* items) {
+  const auto bucket = [&](const Listing& listing, std::vector<Index>* start, std::vector<Index>* items) {
     start->assign(static_cast<std::size_t>(G) + 1, 0);
     for (const auto& [copy, item] : listing) ++(*start)[static_cast<std::size_t>(group_of(copy)) + 1];
     for (Index g = 0; g < G; ++g) (*start)[g + 1] += (*start)[g];
@@ -353,11 +345,11 @@ void SurfaceContact::group_primitives() {
     std::vector<Index> fill(start->begin(), start->end() - 1);
     for (const auto& [copy, item] : listing) (*items)[static_cast<std::size_t>(fill[static_cast<std::size_t>(group_of(copy))]++)] = item;
   };
-  bucket(vertex_listing_, &vertex_start_, &group_vertices_);
-  std::vector<std::pair<Index, Index>> triangle_listing(triangle_copy_.size());
+  bucket(vertices, &vertex_start_, &group_vertices_);
+  Listing triangle_listing(triangle_copy_.size());
   for (std::size_t t = 0; t < triangle_copy_.size(); ++t) triangle_listing[t] = {triangle_copy_[t], static_cast<Index>(t)};
   bucket(triangle_listing, &triangle_start_, &group_triangles_);
-  bucket(edge_listing_, &edge_start_, &group_edges_);
+  bucket(edges, &edge_start_, &group_edges_);
   tree_built_ = false;
   pairs_radius_ = -1;
 }

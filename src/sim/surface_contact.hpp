@@ -240,7 +240,7 @@ class SurfaceContact {
     std::uint8_t rest_touching;  // within the guards' allowance in the material, or touching now, or
                                  // within dhat there on the two sides of one cut (across_one_cut)
     std::uint8_t sutured;     // rest_close between sutured copies (not counted)
-    // Found through a copy that is not its primitive's own (see group_primitives): a vertex or an
+    // Found through a copy that is not its primitive's own (see group_copy_): a vertex or an
     // edge whose own copy neighbours the other primitive's, listed by another copy around it.
     std::uint8_t listed_apart;
     std::uint64_t copies;     // the copy pair, (min << 32) | max
@@ -272,7 +272,10 @@ class SurfaceContact {
   /// 10 was fastest, and 3, 5 and 20 measured no better).
   void cover_copy_pairs(double rho);
   static constexpr double kPairSlack = 10;
-  void group_primitives();
+  /// (copy, primitive) pairs, by primitive: the copies that list each vertex or edge.
+  using Listing = std::vector<std::pair<Index, Index>>;
+  /// Buckets the primitives by the copies that list them (group_copy_ and the CSR below it).
+  void group_primitives(const Listing& vertices, const Listing& edges);
   /// The candidates' joined and sutured flags, from joins_ and sutured_.
   void mark_joined();
   /// proximities_ of the candidates at y_, in parallel: every one, those the barrier counts, the
@@ -361,9 +364,8 @@ class SurfaceContact {
   // The primitives by copy (CSR over group_copy_, the copies that own primitives, ascending), and
   // a box hierarchy over each copy's primitives. A vertex is listed by its own copy and by the
   // copies of its other triangles, an edge by the copies of all its triangles (its own, the
-  // first's, first): see group_primitives.
+  // first's, first): see set_surface.
   std::vector<Index> group_copy_;
-  std::vector<std::pair<Index, Index>> vertex_listing_, edge_listing_;  // (copy, primitive), by primitive
   std::vector<Index> vertex_start_, group_vertices_, triangle_start_, group_triangles_, edge_start_, group_edges_;
   std::vector<spatial::Aabb> copy_boxes_;  // at reference_
   // A second, coarser list under the candidates: the pairs of copies (group indices g < h, not
