@@ -278,7 +278,8 @@ class Simulator {
   /// than the thickness adds the barrier kappa b(d), b(d) = -(d - dhat)^2 ln(d / dhat), and every
   /// Newton step is shortened so that no pair reaches distance 0 (continuous collision detection):
   /// parts of the surface never pass through each other. Not counted: pairs of copies that are
-  /// neighbours (share a node), copies a cut has just separated until their surfaces have moved
+  /// neighbours (share a node), unless they face each other across a cut (then those near each
+  /// other in the material are guarded as below, the others counted), copies a cut has just separated until their surfaces have moved
   /// apart (their vertices are only guarded against going more than a tenth of the thickness
   /// behind the other side's triangles), and, while springs (add_spring) suture an incision, pairs between the copies they
   /// hold that were within the thickness of each other in the material (the springs pull them

@@ -187,6 +187,10 @@ void SurfaceContact::clear_surface() {
   tree_built_ = false;
   pairs_radius_ = -1;
   group_copy_.clear();
+  group_facing_start_.clear();
+  group_facing_.clear();
+  two_sided_triangle_.clear();
+  any_two_sided_ = false;
 }
 
 bool SurfaceContact::neighbours(Index a, Index b) const {
@@ -293,6 +297,55 @@ void SurfaceContact::set_surface(const MaterialSurface& surface, std::span<const
     }
   }
   group_primitives(vertex_listing, edge_listing);
+  // The cuts with material on both sides: a cut triangle's pieces, all in its plane, face both
+  // ways. O(F log F).
+  {
+    std::vector<std::pair<std::int64_t, Index>> by_source;
+    for (std::size_t t = 0; t < F; ++t) {
+      if (surface.triangle_source[t] >= 0 && !rest_normals_[t].isZero()) by_source.emplace_back(surface.triangle_source[t], static_cast<Index>(t));
+    }
+    std::sort(by_source.begin(), by_source.end());
+    two_sided_triangle_.assign(F, 0);
+    for (std::size_t i = 0; i < by_source.size();) {
+      std::size_t end = i;
+      bool both = false;
+      const Vec3& first = rest_normals_[static_cast<std::size_t>(by_source[i].second)];
+      while (end < by_source.size() && by_source[end].first == by_source[i].first) {
+        both = both || rest_normals_[static_cast<std::size_t>(by_source[end].second)].dot(first) < 0;
+        ++end;
+      }
+      for (std::size_t j = i; j < end && both; ++j) two_sided_triangle_[static_cast<std::size_t>(by_source[j].second)] = 1;
+      i = end;
+    }
+    // Per copy, the normals of the two-sided triangles around the primitives it owns (its
+    // triangles, and those around its vertices and edges): a pair of neighbouring copies can
+    // have a pair facing across a cut only where two of these are turned against each other.
+    const auto group_of = [&](Index copy) {
+      return static_cast<std::size_t>(std::lower_bound(group_copy_.begin(), group_copy_.end(), copy) - group_copy_.begin());
+    };
+    std::vector<std::pair<std::size_t, Index>> listed;  // (group, triangle)
+    for (std::size_t t = 0; t < F; ++t) {
+      if (!two_sided_triangle_[t]) continue;
+      const auto& c = triangles_[t];
+      listed.emplace_back(group_of(triangle_copy_[t]), static_cast<Index>(t));
+      for (int k = 0; k < 3; ++k) {
+        listed.emplace_back(group_of(vertex_copy_[static_cast<std::size_t>(c[k])]), static_cast<Index>(t));
+        const std::array<Index, 2> side{std::min(c[k], c[(k + 1) % 3]), std::max(c[k], c[(k + 1) % 3])};
+        const auto e = static_cast<std::size_t>(std::lower_bound(edges_.begin(), edges_.end(), side) - edges_.begin());
+        listed.emplace_back(group_of(edge_copy_[e]), static_cast<Index>(t));
+      }
+    }
+    std::sort(listed.begin(), listed.end());
+    listed.erase(std::unique(listed.begin(), listed.end()), listed.end());
+    group_facing_start_.assign(group_copy_.size() + 1, 0);
+    group_facing_.clear();
+    for (const auto& [g, t] : listed) {
+      ++group_facing_start_[g + 1];
+      group_facing_.push_back(rest_normals_[static_cast<std::size_t>(t)]);
+    }
+    for (std::size_t g = 0; g < group_copy_.size(); ++g) group_facing_start_[g + 1] += group_facing_start_[g];
+    any_two_sided_ = !group_facing_.empty();
+  }
   if (!enabled() || !(settings_.thickness > 0)) return;
 
   // Joins: the old ones of copies this cut left alone, and new ones where a changed copy's
@@ -306,7 +359,7 @@ void SurfaceContact::set_surface(const MaterialSurface& surface, std::span<const
   const double dhat = settings_.thickness;
   for (std::size_t k = 0; k < candidates_.size(); ++k) {
     const Candidate& c = candidates_[k];
-    if (!(proximities_[k].distance < dhat)) continue;
+    if (c.neighbouring || !(proximities_[k].distance < dhat)) continue;
     if (!was_changed(static_cast<Index>(c.copies >> 32)) && !was_changed(static_cast<Index>(c.copies & 0xffffffffu))) continue;
     // Across a cut: close in the material, and copies of tets that were neighbours before any
     // cut (a cut's new nodes keep their sources' rest positions, so such copies have corners at
@@ -384,6 +437,31 @@ std::array<Vec3, 4> SurfaceContact::corner_positions(const Candidate& c, const P
 bool SurfaceContact::vertex_faces(Index v, const Vec3& normal) const {
   for (Index i = vertex_triangle_start_[v]; i < vertex_triangle_start_[v + 1]; ++i) {
     if (rest_normals_[static_cast<std::size_t>(vertex_triangles_[i])].dot(normal) < -kFacing) return true;
+  }
+  return false;
+}
+
+bool SurfaceContact::faces_across_cut(const Candidate& c) const {
+  // Whether triangle t, on a two-sided cut, is faced by one around vertex v on a two-sided cut.
+  const auto faced = [&](Index v, std::size_t t) {
+    if (!two_sided_triangle_[t] || rest_normals_[t].isZero()) return false;
+    for (Index i = vertex_triangle_start_[v]; i < vertex_triangle_start_[v + 1]; ++i) {
+      const auto u = static_cast<std::size_t>(vertex_triangles_[i]);
+      if (two_sided_triangle_[u] && rest_normals_[u].dot(rest_normals_[t]) < -kFacing) return true;
+    }
+    return false;
+  };
+  const std::array<Index, 4> k = corners(c);
+  if (!c.edges) return faced(k[0], static_cast<std::size_t>(c.b));
+  // A face of either edge that a corner of the other faces.
+  for (const auto& [first, second] : {std::pair{0, 2}, std::pair{2, 0}}) {
+    const auto a = static_cast<std::size_t>(k[static_cast<std::size_t>(second)]);
+    const Index b = k[static_cast<std::size_t>(second) + 1];
+    for (Index i = vertex_triangle_start_[a]; i < vertex_triangle_start_[a + 1]; ++i) {
+      const auto t = static_cast<std::size_t>(vertex_triangles_[i]);
+      if (std::find(triangles_[t].begin(), triangles_[t].end(), b) == triangles_[t].end()) continue;
+      if (faced(k[static_cast<std::size_t>(first)], t) || faced(k[static_cast<std::size_t>(first) + 1], t)) return true;
+    }
   }
   return false;
 }
@@ -570,14 +648,17 @@ void SurfaceContact::rebuild(double rho) {
   candidates_.clear();
   append_chunks(static_cast<Index>(copy_pairs_.size()), kChunk, &candidates_, [&](Index begin, Index end, std::vector<Candidate>* found) {
     std::vector<Candidate>& out = *found;
-    const auto consider = [&](Candidate c, Index copy_a, Index copy_b) {
+    const auto consider = [&](Candidate c, Index copy_a, Index copy_b, bool near) {
       // A primitive listed by a copy other than its own: wanted here only where its own copy and
       // the other primitive's neighbour each other (else the pair is found through those), and
       // then perhaps found more than once (through each of its copies apart from the other's):
       // kept once, below.
       const Index own_a = c.edges ? edge_copy_[static_cast<std::size_t>(c.a)] : vertex_copy_[static_cast<std::size_t>(c.a)];
       const Index own_b = c.edges ? edge_copy_[static_cast<std::size_t>(c.b)] : triangle_copy_[static_cast<std::size_t>(c.b)];
-      if (own_a != copy_a || own_b != copy_b) {
+      if (near) {
+        c.neighbouring = 1;
+        if (c.edges && c.b < c.a) std::swap(c.a, c.b);
+      } else if (own_a != copy_a || own_b != copy_b) {
         if (!neighbours(own_a, own_b)) return;
         c.listed_apart = 1;
         if (c.edges && c.b < c.a) std::swap(c.a, c.b);
@@ -585,16 +666,27 @@ void SurfaceContact::rebuild(double rho) {
       const std::array<Index, 4> k = corners(c);
       const bool shared = c.edges ? (k[0] == k[2] || k[0] == k[3] || k[1] == k[2] || k[1] == k[3]) : (k[0] == k[1] || k[0] == k[2] || k[0] == k[3]);
       if (shared) return;
+      // Of neighbouring copies, only pairs whose sides face each other across a two-sided cut: the
+      // two sides of a cut between them (a slinky's coils), held by the guards where they touch
+      // and by the barrier where they have slid along each other. The others, most of them, are a
+      // surface and its own neighbours around a shared node: near in the material, they would only
+      // be joined; farther, they meet only where the surface folds onto itself within a tet or two
+      // (left to the crossing check). Kept, on Figure 8's slinky, they made a list of 12M pairs.
+      if (near && !faces_across_cut(c)) return;
       const double now = proximity(c, y).distance;
       if (!(now <= rho)) return;
       // A pair touching now counts as touching in the material too: joined, it is left out (the
       // barrier is infinite at distance 0), as the joins of surfaces touching from the start are.
       // Only closeness within dhat matters there: a pair whose boxes lay farther apart is not
       // measured (a piece sliding along a cut meets primitives far from its own in the material).
+      // Of neighbouring copies, only pairs apart in the material by more than kNeighbourReach dhat
+      // count; the closer ones are joined (see mark_joined).
+      const double reach = near ? kNeighbourReach * settings_.thickness : settings_.thickness;
       collision::Proximity rest;
-      measure_within(corner_positions(c, rest_y_), c.edges, settings_.thickness, &rest);
+      measure_within(corner_positions(c, rest_y_), c.edges, reach, &rest);
       c.rest_close = rest.distance < settings_.thickness || !(now > 0) ? 1 : 0;
-      c.rest_touching = rest.distance < guard_allowance() || !(now > 0) || (c.rest_close && across_one_cut(c)) ? 1 : 0;
+      c.rest_touching = near ? (rest.distance < reach || !(now > 0) ? 1 : 0)
+                             : (rest.distance < guard_allowance() || !(now > 0) || (c.rest_close && across_one_cut(c)) ? 1 : 0);
       out.push_back(c);
     };
     // The primitives of one copy that reach another's box, with their boxes: most pairs of nearby
@@ -604,13 +696,16 @@ void SurfaceContact::rebuild(double rho) {
     // A vertex that copy g lists but does not own is wanted against copy h only where its own
     // copy neighbours h (see consider); triangles are listed by their own copies only, and an
     // edge's two copies are known only with the other edge.
+    // Of neighbouring copies, each lists only the primitives it owns: the pair is found once,
+    // through its own copies.
     const auto gather = [&](const std::vector<Index>& start, const std::vector<Index>& items, Index g, Index h, const spatial::Aabb& reach,
-                            const auto& box_of, bool vertices, Near* into) {
+                            const auto& box_of, int kind, bool near, Near* into) {
       into->clear();
       for (Index k = start[g]; k < start[g + 1]; ++k) {
-        if (vertices) {
-          const Index own = vertex_copy_[static_cast<std::size_t>(items[k])];
-          if (own != group_copy_[g] && !neighbours(own, group_copy_[h])) continue;
+        if (kind != 1) {
+          const auto item = static_cast<std::size_t>(items[k]);
+          const Index own = kind == 0 ? vertex_copy_[item] : edge_copy_[item];
+          if (own != group_copy_[g] && (near || (kind == 0 && !neighbours(own, group_copy_[h])))) continue;
         }
         const spatial::Aabb box = box_of(items[k]);
         if (reach.meets(box)) into->emplace_back(items[k], box);
@@ -635,14 +730,14 @@ void SurfaceContact::rebuild(double rho) {
     // The primitives of copy g (vertices or edges) near those of copy h (triangles or edges).
     const auto primitive_pairs = [&](const std::vector<Index>& start_g, const std::vector<Index>& items_g, const auto& box_g, Near* near_g,
                                      const std::vector<Index>& start_h, const std::vector<Index>& items_h, const auto& box_h, Near* near_h,
-                                     Index g, Index h, std::uint8_t edges, std::uint64_t key) {
-      gather(start_g, items_g, g, h, box(h).grown(rho), box_g, edges == 0, near_g);
+                                     Index g, Index h, std::uint8_t edges, std::uint64_t key, bool near) {
+      gather(start_g, items_g, g, h, box(h).grown(rho), box_g, edges == 0 ? 0 : 2, near, near_g);
       if (near_g->empty()) return;
-      gather(start_h, items_h, h, g, box(g).grown(rho), box_h, false, near_h);
+      gather(start_h, items_h, h, g, box(g).grown(rho), box_h, edges == 0 ? 1 : 2, near, near_h);
       for (const auto& [a, a_box] : *near_g) {
         const spatial::Aabb reach = a_box.grown(rho);
         for (const auto& [b, b_box] : *near_h) {
-          if (reach.meets(b_box)) consider({a, b, edges, 0, 0, 0, 0, 0, key}, group_copy_[g], group_copy_[h]);
+          if (reach.meets(b_box)) consider({a, b, edges, 0, 0, 0, 0, 0, 0, key}, group_copy_[g], group_copy_[h], near);
         }
       }
     };
@@ -650,32 +745,39 @@ void SurfaceContact::rebuild(double rho) {
       const auto [g, h] = copy_pairs_[static_cast<std::size_t>(i)];
       if (!box(g).grown(rho).meets(box(h))) continue;
       const std::uint64_t key = copy_pair(group_copy_[g], group_copy_[h]);
+      const bool near = neighbours(group_copy_[g], group_copy_[h]);
       for (const auto& [from, to] : {std::pair{g, h}, std::pair{h, g}}) {
         primitive_pairs(vertex_start_, group_vertices_, vertex_box, &near_vertices, triangle_start_, group_triangles_, triangle_box,
-                        &near_triangles, from, to, 0, key);
+                        &near_triangles, from, to, 0, key, near);
       }
-      primitive_pairs(edge_start_, group_edges_, edge_box, &near_edges_g, edge_start_, group_edges_, edge_box, &near_edges_h, g, h, 1, key);
+      primitive_pairs(edge_start_, group_edges_, edge_box, &near_edges_g, edge_start_, group_edges_, edge_box, &near_edges_h, g, h, 1, key,
+                      near);
     }
   });
   // The pairs found through other copies last, each once (through the first of its copy pairs),
   // so that the others keep their order. Rare: primitives on the rims between copies, near the
   // surface of a copy that neighbours one of them (a slinky's coils, a tet apart in the material).
-  const auto apart = std::stable_partition(candidates_.begin(), candidates_.end(), [](const Candidate& c) { return !c.listed_apart; });
+  // The pairs of neighbouring copies go there too: such a pair is listed apart as well where
+  // other copies around its corners are apart, and then counts as found that way.
+  const auto apart = std::stable_partition(candidates_.begin(), candidates_.end(),
+                                           [](const Candidate& c) { return !c.listed_apart && !c.neighbouring; });
   const auto same_pair = [](const Candidate& p, const Candidate& q) { return p.edges == q.edges && p.a == q.a && p.b == q.b; };
   std::sort(apart, candidates_.end(), [](const Candidate& p, const Candidate& q) {
-    return std::tie(p.edges, p.a, p.b, p.copies) < std::tie(q.edges, q.a, q.b, q.copies);
+    return std::tie(p.edges, p.a, p.b, p.neighbouring, p.copies) < std::tie(q.edges, q.a, q.b, q.neighbouring, q.copies);
   });
   candidates_.erase(std::unique(apart, candidates_.end(), same_pair), candidates_.end());
   mark_joined();
 }
 
-std::vector<std::array<Index, 3>> SurfaceContact::candidate_pairs(Index* listed_apart) const {
+std::vector<std::array<Index, 3>> SurfaceContact::candidate_pairs(Index* listed_apart, std::vector<std::uint8_t>* counted) const {
   std::vector<std::array<Index, 3>> pairs;
   pairs.reserve(candidates_.size());
   if (listed_apart) *listed_apart = 0;
+  if (counted) counted->clear();
   for (const Candidate& c : candidates_) {
     pairs.push_back({c.edges, c.a, c.b});
     if (listed_apart) *listed_apart += c.listed_apart;
+    if (counted) counted->push_back(!c.joined && !c.sutured ? 1 : 0);
   }
   return pairs;
 }
@@ -699,10 +801,20 @@ void SurfaceContact::cover_copy_pairs(double rho) {
     copy_tree_.mutable_boxes() = copy_boxes_;  // same count: no allocation
     copy_tree_.refit();
   }
-  // Each pair once (g < h), neighbours left out, sorted: the candidates come in their order.
+  // Each pair once (g < h), neighbours left out unless they may face each other across a cut
+  // (group_facing_), sorted: the candidates come in their order.
+  const auto may_face = [&](Index g, Index h) {
+    for (Index i = group_facing_start_[static_cast<std::size_t>(g)]; i < group_facing_start_[static_cast<std::size_t>(g) + 1]; ++i) {
+      for (Index j = group_facing_start_[static_cast<std::size_t>(h)]; j < group_facing_start_[static_cast<std::size_t>(h) + 1]; ++j) {
+        if (group_facing_[static_cast<std::size_t>(i)].dot(group_facing_[static_cast<std::size_t>(j)]) < -kFacing) return true;
+      }
+    }
+    return false;
+  };
   tbb::enumerable_thread_specific<std::vector<std::array<Index, 2>>> found;
   copy_tree_.self_join(radius, [&](Index g, Index h) {
-    if (!neighbours(group_copy_[g], group_copy_[h])) found.local().push_back({std::min(g, h), std::max(g, h)});
+    if (g == h) return;
+    if (!neighbours(group_copy_[g], group_copy_[h]) || may_face(g, h)) found.local().push_back({std::min(g, h), std::max(g, h)});
   });
   copy_pairs_.clear();
   for (const auto& mine : found) copy_pairs_.insert(copy_pairs_.end(), mine.begin(), mine.end());
@@ -721,7 +833,8 @@ void SurfaceContact::mark_joined() {
     // others: sticks sliding along each other while their cut faces still touch somewhere, and
     // faces of neighbouring sticks a sliver apart (a cut 0.0123 from a lattice plane), whose
     // barrier, finite there, starts active.
-    c.joined = c.rest_touching && std::binary_search(joins_.begin(), joins_.end(), c.copies) ? 1 : 0;
+    // Of neighbouring copies, joined for good: pairs near in the material, guarded where they face.
+    c.joined = c.rest_touching && (c.neighbouring || std::binary_search(joins_.begin(), joins_.end(), c.copies)) ? 1 : 0;
     c.sutured = 0;
     if (sutured_.empty()) continue;
     const std::array<Index, 4> k = corners(c);
@@ -730,10 +843,19 @@ void SurfaceContact::mark_joined() {
         if (sutured(vertex_copy_[static_cast<std::size_t>(v)])) c.sutured = 1;
       }
     }
+    const int first_of_b = c.edges ? 2 : 1;
+    // Or two neighbouring copies with corners in sutured copies on both sides: near an incision's
+    // end, where the two sides' copies share nodes, the springs squeeze the wound shut, pressing
+    // pairs 3 to 8 dhat apart in the material into each other (the lip incision: 17 such pairs
+    // held the springs off, and Newton stalled for two steps as they came in).
+    if (c.neighbouring) {
+      bool first_side = false, second_side = false;
+      for (int i = 0; i < 4; ++i) (i < first_of_b ? first_side : second_side) |= sutured(vertex_copy_[static_cast<std::size_t>(k[i])]);
+      if (first_side && second_side) c.sutured = 1;
+    }
     // Or two copies one spring holds together, wherever in them: the springs pull the whole of
     // both into place, squeezing pairs that were a little further apart than dhat (measured on
     // the lip incision: pairs 1.6 to 1.9 dhat apart in the material pressed to 0.5 dhat).
-    const int first_of_b = c.edges ? 2 : 1;
     for (int i = 0; i < first_of_b && !c.sutured; ++i) {
       for (int j = first_of_b; j < 4 && !c.sutured; ++j) {
         const std::uint64_t key = copy_pair(vertex_copy_[static_cast<std::size_t>(k[i])], vertex_copy_[static_cast<std::size_t>(k[j])]);
@@ -854,7 +976,7 @@ double SurfaceContact::guard_zero(const std::array<Index, 4>& corner, const std:
 
 void SurfaceContact::lag_guards(const Points& start) {
   guards_.clear();
-  if (!enabled() || joins_.empty()) return;
+  if (!enabled() || (joins_.empty() && !any_two_sided_)) return;
   cover(start, 0);
   measure(Measure::kJoined);
   const double dhat = settings_.thickness, delta = guard_allowance();
@@ -982,11 +1104,12 @@ void SurfaceContact::update_joins(const Points& at) {
     return static_cast<std::size_t>(std::lower_bound(joins_.begin(), joins_.end(), c.copies) - joins_.begin());
   };
   for (std::size_t k = 0; k < candidates_.size(); ++k) {
-    if (!candidates_[k].joined || candidates_[k].edges || !(proximities_[k].distance < settings_.thickness)) continue;
-    touching[join_of(candidates_[k])] = 1;
+    const Candidate& c = candidates_[k];
+    if (!c.joined || c.neighbouring || c.edges || !(proximities_[k].distance < settings_.thickness)) continue;
+    touching[join_of(c)] = 1;
   }
   for (const Candidate& c : candidates_) {
-    if (!c.joined || !c.edges || touching[join_of(c)]) continue;
+    if (!c.joined || c.neighbouring || !c.edges || touching[join_of(c)]) continue;
     if (proximity(c, y_).distance < settings_.thickness) touching[join_of(c)] = 1;
   }
   std::size_t kept = 0;

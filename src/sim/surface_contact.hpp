@@ -27,7 +27,25 @@
 // copies' pairs is apart, as the crossing check counts any pair of triangles of copies apart. (By
 // their own copies alone, a coil of Figure 8's slinky, thinner than a tet, shares nodes with the
 // next where one embeds a vertex, and 2.5k vertex-triangle pairs within dhat went unseen whose
-// triangles the check counted: the coils crossed in up to 32 pairs as they bunched.) Excluded for a while: pairs of copies "joined across a cut",
+// triangles the check counted: the coils crossed in up to 32 pairs as they bunched.) But where
+// a cut runs between two copies that share a node, their surfaces do not meet by construction:
+// pairs of such copies are taken where their sides face each other across a two-sided cut in the
+// material (the triangle, or a face around one edge, lies on a cut with material on both sides,
+// and a triangle around the vertex, or around a corner of the other edge, on such a cut is turned
+// more than 120 degrees against it: the two sides of the cut between them). Within
+// kNeighbourReach dhat of each other in the material they are joined for good (left to the
+// guards, below); farther apart, slid along each other, they count. Without them the folded
+// flap's sides, pressed together where its cut ends, crossed in 18 pairs, and the slinky's
+// neighbouring coils (tets of 0.5 against a pitch of 0.42, so that their copies share nodes around
+// the axis) in up to 524 over 1.4 s. The other pairs of such copies, a surface and its own
+// neighbours around a shared node, meet only where the surface folds onto itself within a tet or
+// two: left to the crossing check (listed, they made 12M candidates on the slinky; and a hand's
+// slice meets its skin at a sharp rim, whose faces, turned against each other, guards held as
+// if they were two sides of a cut). An embedded model's carved surface is one-sided, so the femur
+// and the hand cut in two list no such pair and keep their cost. Not seen: a coil's rim pressed
+// into the next coil's face where they meet at right angles, within the thickness of each other
+// in the material (neither faces the other; the slinky crossed in up to 15 such pairs over 1.4 s).
+// Excluded for a while: pairs of copies "joined across a cut",
 // whose surfaces a cut has just made coincide (both sides of a fresh cut are at distance 0, where
 // the barrier is infinite), that touched in the material (within the guards' allowance delta, below;
 // or touched when the list was built), or lay there on the two sides of one cut, apart along it by
@@ -88,11 +106,14 @@
 // hold those edges. What is still unseen is a face of joined copies sagging through a corner
 // with every edge and vertex of it unguarded. Sutures (springs across an incision)
 // take the pairs between their copies that were within dhat in the material out, guards
-// included, while they hold: they are there to bring the two sides back together.
+// included, while they hold: they are there to bring the two sides back together (and the pairs
+// of neighbouring copies with corners in sutured copies on both sides: near the incision's end).
 //
 // Broad phase: per copy, a box around the primitives it owns (a vertex's copy, a triangle's, an
 // edge's first triangle's); pairs of copies whose boxes come within the radius rho, neighbours
-// left out, then their primitives against each other (and the primitives the copies' triangles
+// left out unless two-sided triangles around their primitives face each other (those list only
+// the primitives they own), then their
+// primitives against each other (and the primitives the copies' triangles
 // share with copies that neighbour the other copy: each such pair once). Most primitives near a given one are in
 // its own or neighbouring copies and never listed, so the work goes with the pairs of copies that
 // can really touch (per primitive queries were 100 times slower on a fine embedded surface). The
@@ -211,6 +232,11 @@ class SurfaceContact {
   /// The allowance: how far behind its guard's triangle a vertex may go (a tenth of dhat).
   double guard_allowance() const { return kGuardShare * settings_.thickness; }
   static constexpr double kGuardShare = 0.1;
+  /// Pairs of neighbouring copies (sharing a node; see faces_across_cut) facing each other
+  /// across a cut closer than this many thicknesses in the material are left to the guards:
+  /// beyond dhat, so that none pushes at rest, and beyond it again, so that the two sides of a
+  /// cut, squeezed along themselves, do not push where they lay side by side.
+  static constexpr double kNeighbourReach = 2;
 
   /// Sutures: copies held to others across an incision by springs (Simulator::add_spring), whose
   /// springs pull the two sides back into coincidence where the barrier would keep them apart:
@@ -221,8 +247,9 @@ class SurfaceContact {
 
   Index num_candidates() const { return static_cast<Index>(candidates_.size()); }
   /// The candidates as (edges, a, b): a vertex and a triangle (0), or two edges (1), by their
-  /// indices in edge_list(); and how many were found through a copy not their own. For checks.
-  std::vector<std::array<Index, 3>> candidate_pairs(Index* listed_apart = nullptr) const;
+  /// indices in edge_list(); how many were found through a copy not their own; and per pair
+  /// whether the barrier counts it (neither joined nor sutured). For checks.
+  std::vector<std::array<Index, 3>> candidate_pairs(Index* listed_apart = nullptr, std::vector<std::uint8_t>* counted = nullptr) const;
   const std::vector<std::array<Index, 2>>& edge_list() const { return edges_; }
   Index num_joins() const { return static_cast<Index>(joins_.size()); }
   Index num_rebuilds() const { return rebuilds_; }
@@ -243,6 +270,9 @@ class SurfaceContact {
     // Found through a copy that is not its primitive's own (see group_copy_): a vertex or an
     // edge whose own copy neighbours the other primitive's, listed by another copy around it.
     std::uint8_t listed_apart;
+    // Of copies that share a node, facing each other across a cut (faces_across_cut): joined
+    // for good where rest_touching (within kNeighbourReach dhat in the material, or touching now).
+    std::uint8_t neighbouring;
     std::uint64_t copies;     // the copy pair, (min << 32) | max
   };
   /// Vertex v's share of the nodes' values: sum_i w_i node_value(n_i) over its copy's nodes (its
@@ -290,6 +320,11 @@ class SurfaceContact {
   /// corners, which a triangle of the first faces (turned more than 120 degrees against it).
   /// O(triangles around its corners).
   bool across_one_cut(const Candidate& c) const;
+  /// Whether the pair's sides face each other across a two-sided cut in the material: the
+  /// triangle (or one around an edge) lies on such a cut, and a triangle around the vertex (or a
+  /// corner of the other edge) on such a cut is turned more than 120 degrees against it. Not a
+  /// face of the same material meeting a cut at a sharp rim (a hand's slice and its skin).
+  bool faces_across_cut(const Candidate& c) const;
   /// Whether one of vertex v's triangles is turned more than 120 degrees against `normal` in the
   /// material (v on the other side of a cut from a triangle with that normal).
   bool vertex_faces(Index v, const Vec3& normal) const;
@@ -366,10 +401,19 @@ class SurfaceContact {
   // copies of its other triangles, an edge by the copies of all its triangles (its own, the
   // first's, first): see set_surface.
   std::vector<Index> group_copy_;
+  // Per triangle: on a two-sided cut (a cut triangle with material on both sides somewhere; not
+  // an embedded model's carved surface). Per group (CSR): the rest normals of such triangles
+  // around the primitives it owns. Pairs of copies that share a node are listed too
+  // (copy_pairs_) where two of those normals are turned against each other.
+  std::vector<std::uint8_t> two_sided_triangle_;
+  std::vector<Index> group_facing_start_;
+  std::vector<Vec3> group_facing_;
+  bool any_two_sided_ = false;
   std::vector<Index> vertex_start_, group_vertices_, triangle_start_, group_triangles_, edge_start_, group_edges_;
   std::vector<spatial::Aabb> copy_boxes_;  // at reference_
   // A second, coarser list under the candidates: the pairs of copies (group indices g < h, not
-  // neighbours) whose boxes came within pairs_radius_ of each other at pairs_reference_. It
+  // neighbours unless group_facing_ says they may face each other) whose boxes came within
+  // pairs_radius_ of each other at pairs_reference_. It
   // outlasts several rebuilds of the candidates, which then look only at these pairs instead of
   // querying the hierarchy once per copy (on the hanging femur that was most of a rebuild: about
   // 18 copies met per query, of which all but a few were the copy itself or its neighbours).
