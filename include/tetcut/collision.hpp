@@ -29,12 +29,6 @@ struct SurfaceIntersections {
 /// with the surface's vertices at `positions` (|V| x 3, e.g. Session::surface_positions());
 /// `copy_nodes` are the cut mesh's copies (Cutter::tet_nodes). Excluded, as touching by
 /// construction rather than colliding:
-/// - pairs of copies that share a node: neighbours in the material (a node is shared only through
-///   material, so they are in one piece, within a tet of each other). Their surfaces meet by
-///   construction, and where the tets' faces miss each other by rounding (a cut along 0.5
-///   through a lattice at thirds) the surface has folds of 1e-16 that deformed positions,
-///   rounded, show as crossings. So crossings between parts of one piece less than about a tet
-///   apart in the material are not seen; lips of an incision are, except within a tet of its end;
 /// - pairs that share a point across a cut not yet opened there: two vertices with the same rest
 ///   position (up to its rounding, 64 ulps of the largest rest coordinate: copies may round one
 ///   exact point differently) that are still within `opened` of each other now (at least the rounding
@@ -57,6 +51,14 @@ struct SurfaceIntersections {
 ///   pressed together, go into each other by more than `opened`. A simulation with surface
 ///   contact passes the fresh-cut allowance of its guards (a hundredth of an edge; see
 ///   Simulator::SurfaceContactState).
+/// Pairs of copies that share a node count as any others: where a cut runs between two such
+/// copies (near an incision's end, a folded flap's hinge, the neighbouring coils of a slinky cut
+/// out of tets larger than its pitch) their sides pass through each other as any others' do (the
+/// folded flap's, pressed together where its cut ends, crossed in 18 pairs that were left out as
+/// meeting by construction). Where their surfaces do meet by construction, they touch in the
+/// material and fall under the rules above (folds of 1e-16 where tets' faces miss each other by
+/// rounding, a cut along 0.5 through a lattice at thirds, which deformed positions, rounded,
+/// show as crossing by as little).
 /// Broad phase: a box hierarchy over the triangles; O(F log F + candidates), parallel. Throws
 /// Error(kInvalidArgument) when `positions` has the wrong size or a triangle names a copy that
 /// `copy_nodes` lacks.

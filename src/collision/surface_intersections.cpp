@@ -161,14 +161,6 @@ SurfaceIntersections count_surface_intersections(const MaterialSurface& surface,
       throw Error(ErrorKind::kInvalidArgument, "the surface names tet copy " + std::to_string(copy) + " of " + std::to_string(copy_nodes.size()));
     }
   }
-  const auto neighbours = [&](Index a, Index b) {
-    const auto& p = copy_nodes[static_cast<std::size_t>(surface.triangle_tet[static_cast<std::size_t>(a)])];
-    const auto& q = copy_nodes[static_cast<std::size_t>(surface.triangle_tet[static_cast<std::size_t>(b)])];
-    for (const Index n : p) {
-      if (std::find(q.begin(), q.end(), n) != q.end()) return true;
-    }
-    return false;
-  };
   // Placing a vertex is 4 products and 3 sums of node coordinates: its rounding is a few ulps
   // of the largest coordinate; 64 of them is far below any motion that could open a cut.
   const double scale = positions.size() > 0 ? positions.cwiseAbs().maxCoeff() : 0.0;
@@ -267,7 +259,7 @@ SurfaceIntersections count_surface_intersections(const MaterialSurface& surface,
         if (b <= a || degenerate[static_cast<std::size_t>(b)]) continue;
         if (surface.triangle_tet[static_cast<std::size_t>(a)] == surface.triangle_tet[static_cast<std::size_t>(b)]) continue;
         ++mine.candidates;
-        bool shared = neighbours(a, b) || closed_cut(a, b);
+        bool shared = closed_cut(a, b);
         for (int i = 0; i < 3 && !shared; ++i) {
           for (int j = 0; j < 3 && !shared; ++j) shared = weld[static_cast<std::size_t>(s.triangles(a, i))] == weld[static_cast<std::size_t>(s.triangles(b, j))];
         }

@@ -8,6 +8,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <limits>
 
 namespace tetcut {
@@ -129,6 +130,26 @@ TEST(SurfaceIntersections, ARimApartInTheMaterialByLessThanAllowedCountsOnlyPres
   EXPECT_EQ(t.crossing(pressed(1e-4), 1e-3), 0);
   EXPECT_EQ(t.crossing(pressed(1e-4), 5e-5), 1);
   EXPECT_EQ(t.crossing(pressed(1e-2), 1e-3), 1);
+}
+
+// Two triangles of copies that share a node, apart in the material (a vertical one 0.3 beyond the
+// first's corner), the first moved through the second. Such pairs were left out as neighbours in
+// the material whose surfaces meet by construction; but where a cut runs between two copies that
+// share a node (near an incision's end, the folded flap's hinge, a slinky's neighbouring coils),
+// their sides pass through each other as any others' do (the flap's sides, pressed together where
+// the cut ends, crossed unseen in 18 pairs). They count as pairs of copies apart do.
+TEST(SurfaceIntersections, CopiesSharingANodeCountAsAnyOthers) {
+  Eigen::Matrix<double, 6, 3, Eigen::RowMajor> corners;
+  corners << 0, 0, 0, 1, 0, 0, 0, 1, 0,  // z = 0
+      2.3, 0.3, -0.5, 2.3, 1.5, 0, 2.3, 0.3, 0.5;  // x = 2.3
+  TwoTriangles apart(corners), sharing(corners);
+  sharing.copies = {{0, 1, 2, 3}, {3, 4, 5, 6}};
+  const Points through = apart.first_moved(Vec3(2, 0, 0));
+  for (const TwoTriangles* pair : {&apart, &sharing}) {
+    EXPECT_EQ(pair->crossing(pair->surface.surface.vertices, 0), 0);
+    EXPECT_EQ(pair->crossing(through, 0), 1);
+    EXPECT_EQ(pair->crossing(apart.first_moved(Vec3(1, 0, 0)), 0), 0);  // short of it
+  }
 }
 
 // Where a third face meets a cut: a stick's side (plane y = 0, material at y > 0, x > 0) and its
