@@ -172,7 +172,7 @@ void bind_cutting(py::module_& m) {
           return count_surface_intersections(surface, copies, positions, opened);
         }, py::arg("surface"), py::arg("T"), py::arg("X"), py::arg("opened") = 0.0,
         "Pairs of the surface's triangles of different copies that intersect, with its vertices at X (n, 3) and the cut "
-        "mesh's copies T (m, 4): exact tests; neighbours in the material and unopened cuts left out, and sides of a cut "
+        "mesh's copies T (m, 4): exact tests; pairs sharing a vertex and unopened cuts left out, and sides of a cut "
         "pressed into each other no deeper than `opened` (what a simulation's guards allow: "
         "Simulator.surface_contact()[\"fresh_cut_allowance\"]).");
 
