@@ -190,7 +190,6 @@ void SurfaceContact::clear_surface() {
   group_facing_start_.clear();
   group_facing_.clear();
   two_sided_triangle_.clear();
-  any_two_sided_ = false;
 }
 
 bool SurfaceContact::neighbours(Index a, Index b) const {
@@ -344,7 +343,6 @@ void SurfaceContact::set_surface(const MaterialSurface& surface, std::span<const
       group_facing_.push_back(rest_normals_[static_cast<std::size_t>(t)]);
     }
     for (std::size_t g = 0; g < group_copy_.size(); ++g) group_facing_start_[g + 1] += group_facing_start_[g];
-    any_two_sided_ = !group_facing_.empty();
   }
   if (!enabled() || !(settings_.thickness > 0)) return;
 
@@ -434,9 +432,10 @@ std::array<Vec3, 4> SurfaceContact::corner_positions(const Candidate& c, const P
   return at;
 }
 
-bool SurfaceContact::vertex_faces(Index v, const Vec3& normal) const {
+bool SurfaceContact::vertex_faces(Index v, const Vec3& normal, bool on_two_sided_cut) const {
   for (Index i = vertex_triangle_start_[v]; i < vertex_triangle_start_[v + 1]; ++i) {
-    if (rest_normals_[static_cast<std::size_t>(vertex_triangles_[i])].dot(normal) < -kFacing) return true;
+    const auto t = static_cast<std::size_t>(vertex_triangles_[i]);
+    if ((!on_two_sided_cut || two_sided_triangle_[t]) && rest_normals_[t].dot(normal) < -kFacing) return true;
   }
   return false;
 }
@@ -444,12 +443,7 @@ bool SurfaceContact::vertex_faces(Index v, const Vec3& normal) const {
 bool SurfaceContact::faces_across_cut(const Candidate& c) const {
   // Whether triangle t, on a two-sided cut, is faced by one around vertex v on a two-sided cut.
   const auto faced = [&](Index v, std::size_t t) {
-    if (!two_sided_triangle_[t] || rest_normals_[t].isZero()) return false;
-    for (Index i = vertex_triangle_start_[v]; i < vertex_triangle_start_[v + 1]; ++i) {
-      const auto u = static_cast<std::size_t>(vertex_triangles_[i]);
-      if (two_sided_triangle_[u] && rest_normals_[u].dot(rest_normals_[t]) < -kFacing) return true;
-    }
-    return false;
+    return two_sided_triangle_[t] && !rest_normals_[t].isZero() && vertex_faces(v, rest_normals_[t], true);
   };
   const std::array<Index, 4> k = corners(c);
   if (!c.edges) return faced(k[0], static_cast<std::size_t>(c.b));
@@ -655,14 +649,11 @@ void SurfaceContact::rebuild(double rho) {
       // kept once, below.
       const Index own_a = c.edges ? edge_copy_[static_cast<std::size_t>(c.a)] : vertex_copy_[static_cast<std::size_t>(c.a)];
       const Index own_b = c.edges ? edge_copy_[static_cast<std::size_t>(c.b)] : triangle_copy_[static_cast<std::size_t>(c.b)];
-      if (near) {
-        c.neighbouring = 1;
-        if (c.edges && c.b < c.a) std::swap(c.a, c.b);
-      } else if (own_a != copy_a || own_b != copy_b) {
-        if (!neighbours(own_a, own_b)) return;
-        c.listed_apart = 1;
-        if (c.edges && c.b < c.a) std::swap(c.a, c.b);
-      }
+      // Such pairs, and those of neighbouring copies, may be found twice (edges in either order).
+      c.listed_apart = !near && (own_a != copy_a || own_b != copy_b) ? 1 : 0;
+      if (c.listed_apart && !neighbours(own_a, own_b)) return;
+      c.neighbouring = near ? 1 : 0;
+      if ((c.listed_apart || c.neighbouring) && c.edges && c.b < c.a) std::swap(c.a, c.b);
       const std::array<Index, 4> k = corners(c);
       const bool shared = c.edges ? (k[0] == k[2] || k[0] == k[3] || k[1] == k[2] || k[1] == k[3]) : (k[0] == k[1] || k[0] == k[2] || k[0] == k[3]);
       if (shared) return;
@@ -976,7 +967,7 @@ double SurfaceContact::guard_zero(const std::array<Index, 4>& corner, const std:
 
 void SurfaceContact::lag_guards(const Points& start) {
   guards_.clear();
-  if (!enabled() || (joins_.empty() && !any_two_sided_)) return;
+  if (!enabled() || (joins_.empty() && group_facing_.empty())) return;
   cover(start, 0);
   measure(Measure::kJoined);
   const double dhat = settings_.thickness, delta = guard_allowance();

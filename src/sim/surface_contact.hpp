@@ -325,9 +325,10 @@ class SurfaceContact {
   /// corner of the other edge) on such a cut is turned more than 120 degrees against it. Not a
   /// face of the same material meeting a cut at a sharp rim (a hand's slice and its skin).
   bool faces_across_cut(const Candidate& c) const;
-  /// Whether one of vertex v's triangles is turned more than 120 degrees against `normal` in the
-  /// material (v on the other side of a cut from a triangle with that normal).
-  bool vertex_faces(Index v, const Vec3& normal) const;
+  /// Whether one of vertex v's triangles (of those on two-sided cuts, when asked) is turned more
+  /// than 120 degrees against `normal` in the material (v on the other side of a cut from a
+  /// triangle with that normal).
+  bool vertex_faces(Index v, const Vec3& normal, bool on_two_sided_cut = false) const;
   /// The pair's four corners at vertex positions y (the vertex or first edge first).
   std::array<Vec3, 4> corner_positions(const Candidate& c, const Points& y) const;
   std::array<Index, 4> corners(const Candidate& c) const;
@@ -408,7 +409,6 @@ class SurfaceContact {
   std::vector<std::uint8_t> two_sided_triangle_;
   std::vector<Index> group_facing_start_;
   std::vector<Vec3> group_facing_;
-  bool any_two_sided_ = false;
   std::vector<Index> vertex_start_, group_vertices_, triangle_start_, group_triangles_, edge_start_, group_edges_;
   std::vector<spatial::Aabb> copy_boxes_;  // at reference_
   // A second, coarser list under the candidates: the pairs of copies (group indices g < h, not
