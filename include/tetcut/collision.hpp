@@ -51,6 +51,14 @@ struct SurfaceIntersections {
 ///   pressed together, go into each other by more than `opened`. A simulation with surface
 ///   contact passes the fresh-cut allowance of its guards (a hundredth of an edge; see
 ///   Simulator::SurfaceContactState).
+/// - pairs apart in the material by no more than `slid` that cross by no more than `opened`, as
+///   above: the sides of a cut pressed together and slid along each other, a rim of one side now
+///   pressed into the other's face beside it, or across a crease of the cut. Contact leaves pairs
+///   that close across a cut to its guards, which let them go into each other by the allowance,
+///   as they let touching ones. A simulation with surface contact passes how far apart those may
+///   lie (Simulator::SurfaceContactState::guarded_reach, two thicknesses; on the slinky, the
+///   upper lip of its shell's slit pressed 3e-5 into the lower lip's rim, 0.0017 from it along the
+///   cut in the material, counted as crossing before). 0: only pairs touching there.
 /// Pairs of copies that share a node count as any others: where a cut runs between two such
 /// copies (near an incision's end, a folded flap's hinge, the neighbouring coils of a slinky cut
 /// out of tets larger than its pitch) their sides pass through each other as any others' do (the
@@ -63,6 +71,6 @@ struct SurfaceIntersections {
 /// Error(kInvalidArgument) when `positions` has the wrong size or a triangle names a copy that
 /// `copy_nodes` lacks.
 SurfaceIntersections count_surface_intersections(const MaterialSurface& surface, std::span<const std::array<Index, 4>> copy_nodes,
-                                                 const Points& positions, double opened = 0);
+                                                 const Points& positions, double opened = 0, double slid = 0);
 
 }  // namespace tetcut

@@ -295,10 +295,13 @@ class Simulator {
   /// them in the last step, and how often the broad phase was rebuilt (its candidate pairs, and
   /// the pairs of copies whose boxes come close, under them, less often); and how far the two sides
   /// of a fresh cut may press into each other (a tenth of the thickness: what their guards hold
-  /// each vertex to; see src/sim/surface_contact.hpp).
+  /// each vertex to; see src/sim/surface_contact.hpp), and how far apart in the material pairs
+  /// across a cut may lie that it leaves to those guards (two thicknesses, where the cut runs
+  /// between copies that share a node; pressed together, such pairs may go into each other by the
+  /// allowance too).
   struct SurfaceContactState {
     bool enabled = false;
-    double thickness = 0, stiffness = 0, fresh_cut_allowance = 0;
+    double thickness = 0, stiffness = 0, fresh_cut_allowance = 0, guarded_reach = 0;
     Index candidates = 0, joined_copy_pairs = 0, guards = 0, rebuilds = 0, copy_pair_rebuilds = 0;
   };
   SurfaceContactState surface_contact() const;

@@ -165,16 +165,18 @@ void bind_cutting(py::module_& m) {
       .def_readonly("degenerate_triangles", &SurfaceIntersections::degenerate_triangles)
       .def_property_readonly("examples", [](const SurfaceIntersections& r) { return to_numpy(r.examples); },
                              "int32 (k, 2): up to 16 intersecting pairs of triangle ids");
-  m.def("count_surface_intersections", [](const MaterialSurface& surface, py::handle T, py::handle X, double opened) {
+  m.def("count_surface_intersections", [](const MaterialSurface& surface, py::handle T, py::handle X, double opened, double slid) {
           const std::vector<std::array<Index, 4>> copies = tet_rows(T, "T", -1);
           const Points positions = points(X, "X");
           py::gil_scoped_release release;
-          return count_surface_intersections(surface, copies, positions, opened);
-        }, py::arg("surface"), py::arg("T"), py::arg("X"), py::arg("opened") = 0.0,
+          return count_surface_intersections(surface, copies, positions, opened, slid);
+        }, py::arg("surface"), py::arg("T"), py::arg("X"), py::arg("opened") = 0.0, py::arg("slid") = 0.0,
         "Pairs of the surface's triangles of different copies that intersect, with its vertices at X (n, 3) and the cut "
         "mesh's copies T (m, 4): exact tests; pairs sharing a vertex and unopened cuts left out, and sides of a cut "
         "pressed into each other no deeper than `opened` (what a simulation's guards allow: "
-        "Simulator.surface_contact()[\"fresh_cut_allowance\"]).");
+        "Simulator.surface_contact()[\"fresh_cut_allowance\"]), where they touch in the material or lie within `slid` "
+        "of each other there (slid along the cut; a simulation's guards allow that up to "
+        "Simulator.surface_contact()[\"guarded_reach\"]).");
 
   m.def("swept_blade", [](py::handle A, py::handle B) {
           const Points a = points(A, "A"), b = points(B, "B");

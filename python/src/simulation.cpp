@@ -188,6 +188,7 @@ void bind_sim(py::module_& root) {
              d["rebuilds"] = c.rebuilds;
              d["guards"] = c.guards;
              d["fresh_cut_allowance"] = c.fresh_cut_allowance;
+             d["guarded_reach"] = c.guarded_reach;
              return d;
            }, "What surface contact works with (a dict).")
       .def("surface_contact_energy", &Simulator::surface_contact_energy, "The surface contact energy now (J; inf if two parts touch).")

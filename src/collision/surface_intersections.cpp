@@ -149,7 +149,7 @@ bool facing_in_one_plane(const std::array<Vec3, 3>& a, const std::array<Vec3, 3>
 }  // namespace
 
 SurfaceIntersections count_surface_intersections(const MaterialSurface& surface, std::span<const std::array<Index, 4>> copy_nodes,
-                                                 const Points& positions, double opened) {
+                                                 const Points& positions, double opened, double slid) {
   const TriangleSurface& s = surface.surface;
   if (positions.rows() != s.num_vertices()) {
     throw Error(ErrorKind::kInvalidArgument, "surface positions: " + std::to_string(positions.rows()) + " rows for " +
@@ -206,7 +206,11 @@ SurfaceIntersections count_surface_intersections(const MaterialSurface& surface,
     // outer surface, the two sides' fans over their polygons put corners a little apart on the
     // rim (a wall's triangle and the neighbouring top face's 2e-4 apart in the folded flap).
     const double touching = std::max(rounding * rest_scale, opened);
-    if (triangle_distance(ra, rb) <= touching) return true;
+    // Farther apart there, within `slid`: the sides of a cut pressed together that have slid along
+    // each other, which contact's guards hold to the allowance as they hold touching ones (the
+    // slinky's upper lip of a slit pressed 3e-5 into the lower lip's rim, 0.0017 along the cut from
+    // it in the material).
+    if (triangle_distance(ra, rb) <= std::max(touching, slid)) return true;
     // Or they lay in one plane there, facing each other: the two sides of one flat part of a cut,
     // apart along it. Pressed together, the sides slide along each other, and where one side's fan
     // puts a corner a little beside the other side's triangle they graze as sides that touched do

@@ -560,9 +560,12 @@ class SceneRunner {
       const Points& rest = session_.surface().surface.vertices;
       constexpr double kSolverNoise = 1e-6;  // of the mesh's diagonal
       const double noise = rest.rows() > 0 ? kSolverNoise * (rest.colwise().maxCoeff() - rest.colwise().minCoeff()).norm() : 0.0;
-      const double opened = std::max(noise, session_.simulator().surface_contact().fresh_cut_allowance);
-      const SurfaceIntersections found =
-          count_surface_intersections(session_.surface(), session_.cutter().tet_nodes(), session_.surface_positions(), opened);
+      // Pairs that contact leaves to its guards may have slid along a cut, pressed together by as
+      // much as those allow (see count_surface_intersections).
+      const sim::Simulator::SurfaceContactState contact = session_.simulator().surface_contact();
+      const double opened = std::max(noise, contact.fresh_cut_allowance);
+      const SurfaceIntersections found = count_surface_intersections(session_.surface(), session_.cutter().tet_nodes(),
+                                                                     session_.surface_positions(), opened, contact.guarded_reach);
       summary_.intersecting_pairs.push_back(found.intersecting_pairs);
       summary_.max_intersecting_pairs = std::max(summary_.max_intersecting_pairs, found.intersecting_pairs);
     }

@@ -132,6 +132,28 @@ TEST(SurfaceIntersections, ARimApartInTheMaterialByLessThanAllowedCountsOnlyPres
   EXPECT_EQ(t.crossing(pressed(1e-2), 1e-3), 1);
 }
 
+// The same rim and top face 2e-3 apart in the material, farther than the allowance (1e-3): the
+// sides of a cut pressed together and slid along each other, a rim now pressed into the face
+// beside it (a slinky's slit, pressed shut, its upper lip 3e-5 into the lower lip's rim 0.0017
+// from it along the cut). Counted unless they lie within `slid` of each other there; pressed 0.01
+// in, counted whatever `slid` is.
+TEST(SurfaceIntersections, ARimSlidAlongACutWithinSlidCountsOnlyPressedDeeper) {
+  constexpr double kGap = 2e-3, kAllowed = 1e-3;
+  Eigen::Matrix<double, 6, 3, Eigen::RowMajor> corners;
+  corners << 0, 0, 0, 0, 1, 0, 0, 0.5, -1,  // the wall, normal -x
+      -kGap, 0.2, 0, -kGap, 0.8, 0, -1, 0.2, 0;  // the top face, normal +z
+  const TwoTriangles t(corners);
+  const auto pressed = [&](double by) { return t.first_moved(Vec3(-kGap - by, 0, 1e-4)); };
+  const auto crossing = [&](const Points& at, double slid) {
+    return count_surface_intersections(t.surface, t.copies, at, kAllowed, slid).intersecting_pairs;
+  };
+  EXPECT_EQ(crossing(pressed(1e-4), 0), 1);
+  EXPECT_EQ(crossing(pressed(1e-4), kGap / 2), 1);
+  EXPECT_EQ(crossing(pressed(1e-4), 2 * kGap), 0);
+  EXPECT_EQ(crossing(pressed(1e-2), 2 * kGap), 1);
+  EXPECT_EQ(crossing(t.surface.surface.vertices, 0), 0);
+}
+
 // Two triangles of copies that share a node, apart in the material (a vertical one 0.3 beyond the
 // first's corner), the first moved through the second. Such pairs were left out as neighbours in
 // the material whose surfaces meet by construction; but where a cut runs between two copies that

@@ -219,6 +219,12 @@ def test_counting_where_the_surface_passes_through_itself():
     pressed = s.positions(result.tets, X)
     assert tetcut.count_surface_intersections(s, result.tets, pressed, opened=2e-3).intersecting_pairs == 0
     assert tetcut.count_surface_intersections(s, result.tets, pressed).intersecting_pairs > 0
+    # Slid 0.4 along the cut as well: faces apart in the material now cross by 1e-3, counted unless
+    # they lie within `slid` of each other there.
+    X[np.unique(result.tets[right]), 2] += 0.4
+    slid = s.positions(result.tets, X)
+    assert tetcut.count_surface_intersections(s, result.tets, slid, opened=2e-3).intersecting_pairs > 0
+    assert tetcut.count_surface_intersections(s, result.tets, slid, opened=2e-3, slid=2.0).intersecting_pairs == 0
 
 
 def test_a_session_keeps_its_scene_alive():

@@ -48,8 +48,9 @@ sim::Material soft() {
 Index crossings(const MaterialSurface& surface, const std::vector<std::array<Index, 4>>& copies, const sim::Simulator& sim) {
   const Points at = surface.positions(copies, sim.positions());
   const double diagonal = (at.colwise().maxCoeff() - at.colwise().minCoeff()).norm();
-  const double opened = std::max(1e-6 * diagonal, sim.surface_contact().fresh_cut_allowance);
-  return count_surface_intersections(surface, copies, at, opened).intersecting_pairs;
+  const sim::Simulator::SurfaceContactState contact = sim.surface_contact();
+  const double opened = std::max(1e-6 * diagonal, contact.fresh_cut_allowance);
+  return count_surface_intersections(surface, copies, at, opened, contact.guarded_reach).intersecting_pairs;
 }
 
 // Contact on an uncut surface (nothing changed by a cut: no joins) at positions x, with thickness
@@ -162,6 +163,8 @@ TEST(SurfaceContact, CollidingBlocksDoNotInterpenetrateAndKeepTheirMomentum) {
   const sim::Simulator::SurfaceContactState state = sim.surface_contact();
   ASSERT_TRUE(state.enabled);
   EXPECT_EQ(state.joined_copy_pairs, 0);
+  EXPECT_GT(state.fresh_cut_allowance, 0);
+  EXPECT_DOUBLE_EQ(state.guarded_reach, 2 * state.thickness);
   // The upper block flies down onto the lower one at 8 m/s, without gravity: the first step
   // would take it past the gap.
   Points v = Points::Zero(sim.num_nodes(), 3);
