@@ -219,7 +219,7 @@ Simulator::SurfaceContactState Simulator::surface_contact() const {
   out.joined_copy_pairs = c.num_joins();
   out.guards = c.num_guards();
   out.fresh_cut_allowance = c.enabled() ? c.guard_allowance() : 0.0;
-  out.guarded_reach = c.enabled() ? detail::SurfaceContact::kNeighbourReach * c.settings().thickness : 0.0;
+  out.guarded_reach = c.enabled() ? c.guarded_reach() : 0.0;
   out.rebuilds = c.num_rebuilds();
   out.copy_pair_rebuilds = c.num_pair_rebuilds();
   return out;

@@ -672,7 +672,7 @@ void SurfaceContact::rebuild(double rho) {
       // measured (a piece sliding along a cut meets primitives far from its own in the material).
       // Of neighbouring copies, only pairs apart in the material by more than kNeighbourReach dhat
       // count; the closer ones are joined (see mark_joined).
-      const double reach = near ? kNeighbourReach * settings_.thickness : settings_.thickness;
+      const double reach = near ? guarded_reach() : settings_.thickness;
       collision::Proximity rest;
       measure_within(corner_positions(c, rest_y_), c.edges, reach, &rest);
       c.rest_close = rest.distance < settings_.thickness || !(now > 0) ? 1 : 0;

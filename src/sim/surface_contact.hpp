@@ -237,6 +237,9 @@ class SurfaceContact {
   /// beyond dhat, so that none pushes at rest, and beyond it again, so that the two sides of a
   /// cut, squeezed along themselves, do not push where they lay side by side.
   static constexpr double kNeighbourReach = 2;
+  /// How far apart in the material a pair across a cut may lie and still be left to the guards
+  /// (kNeighbourReach dhat): what the crossing check lets graze by the allowance.
+  double guarded_reach() const { return kNeighbourReach * settings_.thickness; }
 
   /// Sutures: copies held to others across an incision by springs (Simulator::add_spring), whose
   /// springs pull the two sides back into coincidence where the barrier would keep them apart:
