@@ -44,6 +44,18 @@ constexpr double kSamePlane = 1e-6;
 // A guard's vertex may lie beside its triangle by up to the triangle's size (its barycentric
 // coordinates down to -1).
 constexpr double kBeside = 1;
+// A guard's barrier stops this share of the allowance behind its zero: the plane it holds is its
+// triangle's at the step's start, and a triangle that turns within the step carries its plane past
+// the vertex held to the old one (corners pressed to the barrier's wall at the bottom of Figure
+// 4's pile, 0.97 of the allowance behind the held plane, were 1.0003 behind their triangles' own
+// at the step's end). The rest is room for that turn, so that what the crossing check allows (the
+// whole allowance) is not passed.
+constexpr double kGuardWall = 0.9;
+// A guard whose pair is found at a step's start behind the wall (its triangle turned since the
+// last start) is given a wall this share of the allowance deeper than where it is: little, so
+// that the barrier pushes it back out rather than letting the load that pressed it there press it
+// deeper (at the bottom of Figure 4's pile corners sat 0.03 of the allowance from the wall).
+constexpr double kRecoverShare = 0.01;
 
 // The unit normal of triangle (a, b, c), or zero where it is flat for a scale of `length`.
 Vec3 unit_normal(const Vec3& a, const Vec3& b, const Vec3& c, double length) {
@@ -939,8 +951,8 @@ double SurfaceContact::max_step(const Points& from, const double* direction) {
     smallest[static_cast<std::size_t>(chunk)] = t_min;
   });
   double t_guard = 1;
-  const double delta = guard_allowance();
   for (const Guard& guard : guards_) {
+    const double delta = guard.allowance;
     double g = 0, rate = 0;
     for (int a = 0; a < guard.term.count; ++a) {
       const auto node = static_cast<std::size_t>(guard.term.nodes[a]);
@@ -977,7 +989,7 @@ void SurfaceContact::lag_guards(const Points& start) {
     std::size_t k;  // the candidate
     std::array<double, 3> beta;
     Vec3 normal;
-    double zero;
+    double zero, allowance;
   };
   // Both scans below run in parallel over fixed chunks of the candidates, their findings joined
   // in chunk order: the guards do not depend on the number of threads.
@@ -1009,8 +1021,15 @@ void SurfaceContact::lag_guards(const Points& start) {
       const double zero = guard_zero({corner[0], corner[1], corner[2], corner[3]}, {1, -beta_a, -beta_b, -beta_c}, corner[1], corner[2],
                                      corner[3]);
       const double g = normal.dot(p - (beta_a * a + beta_b * b + beta_c * q)) - zero;
-      if (!(g > -delta)) continue;  // already behind: nothing a guard could hold
-      out->push_back({corner[0], std::min({beta_a, beta_b, beta_c}), static_cast<std::size_t>(k), {beta_a, beta_b, beta_c}, normal, zero});
+      const double inside = std::min({beta_a, beta_b, beta_c});
+      // Found behind the whole allowance, the vertex has passed what a guard allows: Figure 4's
+      // pile left such a corner unguarded, and it sank 18 allowances into the other stick over
+      // four steps. Over the triangle (not beside it, where it may have gone round the other
+      // side's rim), within dhat of it, it is in the other side's material: guarded from where
+      // it is, it is pushed back out.
+      if (!(g > -delta) && !(inside >= 0)) continue;
+      const double allowance = std::max(kGuardWall * delta, -g + kRecoverShare * delta);
+      out->push_back({corner[0], inside, static_cast<std::size_t>(k), {beta_a, beta_b, beta_c}, normal, zero, allowance});
     }
   });
   // One guard per vertex and plane: a vertex facing a fan of coplanar triangles (the other side
@@ -1031,7 +1050,7 @@ void SurfaceContact::lag_guards(const Points& start) {
       if (same_plane) continue;
       collision::Proximity foot;
       foot.w = {1.0, -found[j].beta[0], -found[j].beta[1], -found[j].beta[2]};
-      guards_.push_back({term(candidates_[found[j].k], foot), found[j].normal, found[j].zero});
+      guards_.push_back({term(candidates_[found[j].k], foot), found[j].normal, found[j].zero, found[j].allowance});
       guard_vertex.push_back(found[j].vertex);
     }
     i = end;
@@ -1074,10 +1093,11 @@ void SurfaceContact::lag_guards(const Points& start) {
           collision::Proximity foot = p;
           for (double& w : foot.w) w *= sign;
           const double zero = guard_zero(corner, foot.w, tri[0], tri[1], tri[2]);
-          if (!(sign * normal.dot(p.r) - zero > -delta)) continue;  // already behind
+          const double g = sign * normal.dot(p.r) - zero;
+          if (!(g > -delta)) continue;  // already behind
           // Both ends held to this plane by their own guards hold the edge (g is linear along it).
           if (held(corner[static_cast<std::size_t>(first)], normal) && held(corner[static_cast<std::size_t>(first) + 1], normal)) continue;
-          out->push_back({term(c, foot), normal, zero});
+          out->push_back({term(c, foot), normal, zero, std::max(kGuardWall * delta, -g + kRecoverShare * delta)});
         }
       }
     }

@@ -74,8 +74,14 @@
 // vertex on the rim slips past the edge of the triangles it lay on) held for the step, so that g
 // is linear in the nodes and the term is exact with a positive semi-definite Hessian. Its zero
 // is the fresh cut itself (g = 0), and the allowance delta = dhat / 10 is how far one side may be
-// pressed into the other; conservative advancement keeps every guard's g above -delta in the
-// line search, as it keeps the pairs' distances above 0. A guard's g is measured from where its
+// pressed into the other. The barrier's wall stands at 0.9 delta (the rest is room for the
+// triangle's turn within the step, which carries its own plane past the one held: corners pressed
+// to the wall at the bottom of Figure 4's pile were 1.0003 delta behind their triangles at the
+// step's end); conservative advancement keeps every guard's g above the wall in the line search,
+// as it keeps the pairs' distances above 0. A vertex found behind the whole allowance at a step's
+// start, over its triangle, is guarded from where it is, its wall a hundredth of delta deeper, so
+// that the barrier pushes it back out (left unguarded, such a corner of Figure 4 sank 18
+// allowances into the other stick in four steps). A guard's g is measured from where its
 // pair lay in the material when that was behind the plane, less a millionth of the allowance, so
 // that no guard pushes at rest: where two cuts meet, a side's rim is triangulated apart from the
 // other side's faces, and some edge pairs lay up to 0.66 of the allowance behind (13 guards on
@@ -371,6 +377,9 @@ class SurfaceContact {
     ContactTerm term;
     Vec3 normal;
     double zero;  // where the barrier starts: the pair's g in the material if behind, less the slack
+    // How far behind its zero the barrier lets the vertex go: the allowance, or more for a vertex
+    // found behind it already at the step's start (see lag_guards).
+    double allowance;
   };
   /// A guard's zero: its g in the material where the pair lay behind the plane there (the rims of
   /// cuts that meet at a junction, whose faces were triangulated apart), so that no guard pushes
@@ -446,9 +455,10 @@ void SurfaceContact::for_each_active(const Points& at, Visit&& visit) {
     visit(t, kappa * barrier(p.distance, dhat), Vec3(kappa * barrier_first(p.distance, dhat) * n),
           Mat3(kappa * barrier_second(p.distance, dhat) * n * n.transpose()));
   }
-  // The guards: the barrier on g + delta with thickness delta, zero while g >= 0.
-  const double delta = guard_allowance();
+  // The guards: the barrier on g + delta with thickness delta (the guard's allowance), zero while
+  // g >= 0.
   for (const Guard& guard : guards_) {
+    const double delta = guard.allowance;
     Vec3 r = Vec3::Zero();
     for (int a = 0; a < guard.term.count; ++a) r += guard.term.coefficients[a] * at.row(guard.term.nodes[a]).transpose();
     const double g = guard.normal.dot(r) - guard.zero;
