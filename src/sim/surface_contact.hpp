@@ -377,8 +377,8 @@ class SurfaceContact {
     ContactTerm term;
     Vec3 normal;
     double zero;  // where the barrier starts: the pair's g in the material if behind, less the slack
-    // How far behind its zero the barrier lets the vertex go: the allowance, or more for a vertex
-    // found behind it already at the step's start (see lag_guards).
+    // How far behind its zero the barrier's wall stands: 0.9 of the allowance, or a little deeper
+    // than a pair found behind that at the step's start (see lag_guards).
     double allowance;
   };
   /// A guard's zero: its g in the material where the pair lay behind the plane there (the rims of
