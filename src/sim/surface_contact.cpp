@@ -56,6 +56,9 @@ constexpr double kGuardWall = 0.9;
 // that the barrier pushes it back out rather than letting the load that pressed it there press it
 // deeper (at the bottom of Figure 4's pile corners sat 0.03 of the allowance from the wall).
 constexpr double kRecoverShare = 0.01;
+// How far behind its zero a guard's wall stands, for a pair at g (from the zero) at the step's
+// start: kGuardWall of the allowance delta, or kRecoverShare of it deeper than the pair.
+double guard_wall(double g, double delta) { return std::max(kGuardWall * delta, -g + kRecoverShare * delta); }
 
 // The unit normal of triangle (a, b, c), or zero where it is flat for a scale of `length`.
 Vec3 unit_normal(const Vec3& a, const Vec3& b, const Vec3& c, double length) {
@@ -952,7 +955,7 @@ double SurfaceContact::max_step(const Points& from, const double* direction) {
   });
   double t_guard = 1;
   for (const Guard& guard : guards_) {
-    const double delta = guard.allowance;
+    const double delta = guard.wall;
     double g = 0, rate = 0;
     for (int a = 0; a < guard.term.count; ++a) {
       const auto node = static_cast<std::size_t>(guard.term.nodes[a]);
@@ -989,7 +992,7 @@ void SurfaceContact::lag_guards(const Points& start) {
     std::size_t k;  // the candidate
     std::array<double, 3> beta;
     Vec3 normal;
-    double zero, allowance;
+    double zero, wall;
   };
   // Both scans below run in parallel over fixed chunks of the candidates, their findings joined
   // in chunk order: the guards do not depend on the number of threads.
@@ -1028,8 +1031,7 @@ void SurfaceContact::lag_guards(const Points& start) {
       // side's rim), within dhat of it, it is in the other side's material: guarded from where
       // it is, it is pushed back out.
       if (!(g > -delta) && !(inside >= 0)) continue;
-      const double allowance = std::max(kGuardWall * delta, -g + kRecoverShare * delta);
-      out->push_back({corner[0], inside, static_cast<std::size_t>(k), {beta_a, beta_b, beta_c}, normal, zero, allowance});
+      out->push_back({corner[0], inside, static_cast<std::size_t>(k), {beta_a, beta_b, beta_c}, normal, zero, guard_wall(g, delta)});
     }
   });
   // One guard per vertex and plane: a vertex facing a fan of coplanar triangles (the other side
@@ -1050,7 +1052,7 @@ void SurfaceContact::lag_guards(const Points& start) {
       if (same_plane) continue;
       collision::Proximity foot;
       foot.w = {1.0, -found[j].beta[0], -found[j].beta[1], -found[j].beta[2]};
-      guards_.push_back({term(candidates_[found[j].k], foot), found[j].normal, found[j].zero, found[j].allowance});
+      guards_.push_back({term(candidates_[found[j].k], foot), found[j].normal, found[j].zero, found[j].wall});
       guard_vertex.push_back(found[j].vertex);
     }
     i = end;
@@ -1097,7 +1099,7 @@ void SurfaceContact::lag_guards(const Points& start) {
           if (!(g > -delta)) continue;  // already behind
           // Both ends held to this plane by their own guards hold the edge (g is linear along it).
           if (held(corner[static_cast<std::size_t>(first)], normal) && held(corner[static_cast<std::size_t>(first) + 1], normal)) continue;
-          out->push_back({term(c, foot), normal, zero, std::max(kGuardWall * delta, -g + kRecoverShare * delta)});
+          out->push_back({term(c, foot), normal, zero, guard_wall(g, delta)});
         }
       }
     }

@@ -379,7 +379,7 @@ class SurfaceContact {
     double zero;  // where the barrier starts: the pair's g in the material if behind, less the slack
     // How far behind its zero the barrier's wall stands: 0.9 of the allowance, or a little deeper
     // than a pair found behind that at the step's start (see lag_guards).
-    double allowance;
+    double wall;
   };
   /// A guard's zero: its g in the material where the pair lay behind the plane there (the rims of
   /// cuts that meet at a junction, whose faces were triangulated apart), so that no guard pushes
@@ -455,10 +455,10 @@ void SurfaceContact::for_each_active(const Points& at, Visit&& visit) {
     visit(t, kappa * barrier(p.distance, dhat), Vec3(kappa * barrier_first(p.distance, dhat) * n),
           Mat3(kappa * barrier_second(p.distance, dhat) * n * n.transpose()));
   }
-  // The guards: the barrier on g + delta with thickness delta (the guard's allowance), zero while
+  // The guards: the barrier on g + delta with thickness delta (the guard's wall), zero while
   // g >= 0.
   for (const Guard& guard : guards_) {
-    const double delta = guard.allowance;
+    const double delta = guard.wall;
     Vec3 r = Vec3::Zero();
     for (int a = 0; a < guard.term.count; ++a) r += guard.term.coefficients[a] * at.row(guard.term.nodes[a]).transpose();
     const double g = guard.normal.dot(r) - guard.zero;

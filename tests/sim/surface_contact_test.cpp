@@ -244,6 +244,17 @@ TEST(SurfaceContact, BlocksDroppedOnEachOtherComeToRest) {
 }
 
 // A block cut in two by x = 0.43, simulated with surface contact.
+// The piece left of a CutBlock's cut (x = 0.43): that of a copy wholly left of it, or -1.
+Index piece_left_of_cut(const CutResult& result) {
+  const TetMesh& mesh = result.mesh.mesh;
+  for (Index t = 0; t < mesh.num_tets(); ++t) {
+    double most = 0;
+    for (int k = 0; k < 4; ++k) most = std::max(most, mesh.rest()(mesh.tets()(t, k), 0));
+    if (most < 0.3) return result.mesh.tet_piece[t];
+  }
+  return -1;
+}
+
 struct CutBlock {
   Cutter cutter{make_grid({Vec3(0, 0, 0), Vec3(1, 1, 1)}, {4, 4, 4}, 5)};
   CutResult result;
@@ -309,15 +320,7 @@ TEST(SurfaceContact, HalvesOfAFreshCutDrivenIntoEachOtherDoNotPassThrough) {
   sim::Simulator& sim = block.sim;
   ASSERT_GT(sim.surface_contact().joined_copy_pairs, 0);
   Points v = Points::Zero(sim.num_nodes(), 3);
-  const Index left_piece = [&] {
-    // The piece of a copy wholly left of the cut.
-    for (Index t = 0; t < result.mesh.mesh.num_tets(); ++t) {
-      double most = 0;
-      for (int k = 0; k < 4; ++k) most = std::max(most, result.mesh.mesh.rest()(result.mesh.mesh.tets()(t, k), 0));
-      if (most < 0.3) return result.mesh.tet_piece[t];
-    }
-    return Index{-1};
-  }();
+  const Index left_piece = piece_left_of_cut(result);
   ASSERT_GE(left_piece, 0);
   for (Index t = 0; t < result.mesh.mesh.num_tets(); ++t) {
     for (int k = 0; k < 4; ++k) v(result.mesh.mesh.tets()(t, k), 0) = result.mesh.tet_piece[t] == left_piece ? 1 : -1;
@@ -372,13 +375,7 @@ TEST(SurfaceContact, HalvesFoundPressedBeyondTheAllowanceArePushedBackOut) {
   sim::Simulator& sim = block.sim;
   const double delta = sim.surface_contact().fresh_cut_allowance;
   ASSERT_GT(delta, 0);
-  // The piece left of the cut (x = 0.43): that of a copy wholly left of it.
-  Index left_piece = -1;
-  for (Index t = 0; t < mesh.num_tets() && left_piece < 0; ++t) {
-    double most = 0;
-    for (int k = 0; k < 4; ++k) most = std::max(most, mesh.rest()(mesh.tets()(t, k), 0));
-    if (most < 0.3) left_piece = result.mesh.tet_piece[t];
-  }
+  const Index left_piece = piece_left_of_cut(result);
   ASSERT_GE(left_piece, 0);
   Points x = sim.positions();
   for (Index t = 0; t < mesh.num_tets(); ++t) {
