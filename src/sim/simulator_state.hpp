@@ -114,6 +114,8 @@ struct SimulatorState {
   std::vector<ConstraintTerm> ledger_constraints;
   std::vector<std::pair<OrderedElement, Mat3>> reuse_take_out;
   std::vector<Index> reuse_put_in;
+  // Scratch of the constraint terms' scatter: per term its first block, per block its slot.
+  std::vector<Index> term_block_start, term_slots;
 
   // Scratch reused from step to step, so that a step allocates nothing once sizes settle (and
   // why a Simulator, even through const calls, is for one thread at a time).
