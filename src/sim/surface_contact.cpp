@@ -191,6 +191,8 @@ void SurfaceContact::clear_surface() {
   triangle_copy_.clear();
   edges_.clear();
   edge_copy_.clear();
+  edge_triangle_start_.assign(1, 0);
+  edge_triangles_.clear();
   copy_nodes_.clear();
   surface_nodes_.clear();
   candidates_.clear();
@@ -277,7 +279,11 @@ void SurfaceContact::set_surface(const MaterialSurface& surface, std::span<const
     edges_.push_back({a, b});
     edge_copy_.push_back(triangle_copy_[static_cast<std::size_t>(sides[i].second)]);
     const std::size_t first_listing = edge_listing.size();
-    for (std::size_t j = i; j < end; ++j) list_once(&edge_listing, first_listing, triangle_copy_[static_cast<std::size_t>(sides[j].second)], e);
+    for (std::size_t j = i; j < end; ++j) {
+      list_once(&edge_listing, first_listing, triangle_copy_[static_cast<std::size_t>(sides[j].second)], e);
+      edge_triangles_.push_back(sides[j].second);
+    }
+    edge_triangle_start_.push_back(static_cast<Index>(edge_triangles_.size()));
     length += (s.vertices.row(a) - s.vertices.row(b)).norm();
     i = end;
   }
@@ -529,6 +535,51 @@ ContactTerm SurfaceContact::term(const Candidate& c, const collision::Proximity&
     }
   }
   return t;
+}
+
+void SurfaceContact::collect_active(const Points& at) {
+  cover(at, 0);
+  measure(Measure::kCounted);
+  const double dhat = settings_.thickness, kappa = settings_.stiffness;
+  constexpr double kInfinity = std::numeric_limits<double>::infinity();
+  const auto K = static_cast<Index>(candidates_.size()), guard_count = static_cast<Index>(guards_.size());
+  const Index pair_chunks = (K + kNodeChunk - 1) / kNodeChunk, guard_chunks = (guard_count + kNodeChunk - 1) / kNodeChunk;
+  active_.resize(static_cast<std::size_t>(pair_chunks + guard_chunks));
+  for (std::vector<ActiveTerm>& chunk : active_) chunk.clear();
+  for_chunks(pair_chunks + guard_chunks, 1, [&](Index chunk, Index, Index) {
+    std::vector<ActiveTerm>& out = active_[static_cast<std::size_t>(chunk)];
+    if (chunk < pair_chunks) {
+      for (Index k = chunk * kNodeChunk; k < std::min(K, (chunk + 1) * kNodeChunk); ++k) {
+        const collision::Proximity& p = proximities_[k];
+        if (candidates_[k].joined || candidates_[k].sutured || !(p.distance < dhat)) continue;
+        const ContactTerm t = term(candidates_[k], p);
+        if (!(p.distance > 0)) {
+          out.push_back({t, kInfinity, Vec3::Zero(), Mat3::Zero()});
+          continue;
+        }
+        const Vec3 n = p.r / p.distance;
+        out.push_back({t, kappa * barrier(p.distance, dhat), kappa * barrier_first(p.distance, dhat) * n,
+                       kappa * barrier_second(p.distance, dhat) * n * n.transpose()});
+      }
+      return;
+    }
+    // The guards: the barrier on g + wall with thickness wall, zero while g >= 0.
+    const Index first = (chunk - pair_chunks) * kNodeChunk;
+    for (Index k = first; k < std::min(guard_count, first + kNodeChunk); ++k) {
+      const Guard& guard = guards_[static_cast<std::size_t>(k)];
+      const double wall = guard.wall;
+      Vec3 r = Vec3::Zero();
+      for (int a = 0; a < guard.term.count; ++a) r += guard.term.coefficients[a] * at.row(guard.term.nodes[a]).transpose();
+      const double g = guard.normal.dot(r) - guard.zero;
+      if (g >= 0) continue;
+      if (!(g + wall > 0)) {
+        out.push_back({guard.term, kInfinity, Vec3::Zero(), Mat3::Zero()});
+        continue;
+      }
+      out.push_back({guard.term, kappa * barrier(g + wall, wall), kappa * barrier_first(g + wall, wall) * guard.normal,
+                     kappa * barrier_second(g + wall, wall) * guard.normal * guard.normal.transpose()});
+    }
+  });
 }
 
 void SurfaceContact::measure(Measure which) {
@@ -970,9 +1021,8 @@ double SurfaceContact::max_step(const Points& from, const double* direction) {
   return std::min(t_guard, share * *std::min_element(smallest.begin(), smallest.end()));
 }
 
-double SurfaceContact::guard_zero(const std::array<Index, 4>& corner, const std::array<double, 4>& w, Index t0, Index t1,
-                                  Index t2) const {
-  const Vec3 rest_normal = unit_normal(rest_y_.row(t0).transpose(), rest_y_.row(t1).transpose(), rest_y_.row(t2).transpose(), settings_.thickness);
+double SurfaceContact::guard_zero(const std::array<Index, 4>& corner, const std::array<double, 4>& w, Index triangle) const {
+  const Vec3& rest_normal = rest_normals_[static_cast<std::size_t>(triangle)];
   const double slack = kGuardSlack * guard_allowance();
   if (rest_normal.isZero()) return -slack;
   Vec3 r = Vec3::Zero();
@@ -1021,8 +1071,7 @@ void SurfaceContact::lag_guards(const Points& start) {
       const double beta_b = cross.dot(ap.cross(q - a)) / area2, beta_c = cross.dot((b - a).cross(ap)) / area2;
       const double beta_a = 1 - beta_b - beta_c;
       if (std::min({beta_a, beta_b, beta_c}) < -kBeside) continue;
-      const double zero = guard_zero({corner[0], corner[1], corner[2], corner[3]}, {1, -beta_a, -beta_b, -beta_c}, corner[1], corner[2],
-                                     corner[3]);
+      const double zero = guard_zero({corner[0], corner[1], corner[2], corner[3]}, {1, -beta_a, -beta_b, -beta_c}, c.b);
       const double g = normal.dot(p - (beta_a * a + beta_b * b + beta_c * q)) - zero;
       const double inside = std::min({beta_a, beta_b, beta_c});
       // Found behind the whole allowance, the vertex has passed what a guard allows: Figure 4's
@@ -1080,11 +1129,10 @@ void SurfaceContact::lag_guards(const Points& start) {
       // The faces of edge (k0, k1), turned against a face around the other edge's corners; sign +1
       // when the faces are the second edge's (r points from them to the first edge), -1 otherwise.
       for (const auto& [first, second, sign] : {std::tuple{0, 2, 1.0}, std::tuple{2, 0, -1.0}}) {
-        const Index a = corner[static_cast<std::size_t>(second)], b = corner[static_cast<std::size_t>(second) + 1];
-        for (Index i = vertex_triangle_start_[a]; i < vertex_triangle_start_[a + 1]; ++i) {
-          const Index t = vertex_triangles_[i];
+        const auto edge = static_cast<std::size_t>(second == 0 ? c.a : c.b);
+        for (Index i = edge_triangle_start_[edge]; i < edge_triangle_start_[edge + 1]; ++i) {
+          const Index t = edge_triangles_[static_cast<std::size_t>(i)];
           const auto& tri = triangles_[static_cast<std::size_t>(t)];
-          if (std::find(tri.begin(), tri.end(), b) == tri.end()) continue;
           const Vec3& facing = rest_normals_[static_cast<std::size_t>(t)];
           if (facing.isZero() || !(vertex_faces(corner[static_cast<std::size_t>(first)], facing) ||
                                    vertex_faces(corner[static_cast<std::size_t>(first) + 1], facing))) {
@@ -1094,7 +1142,7 @@ void SurfaceContact::lag_guards(const Points& start) {
           if (normal.isZero()) continue;
           collision::Proximity foot = p;
           for (double& w : foot.w) w *= sign;
-          const double zero = guard_zero(corner, foot.w, tri[0], tri[1], tri[2]);
+          const double zero = guard_zero(corner, foot.w, t);
           const double g = sign * normal.dot(p.r) - zero;
           if (!(g > -delta)) continue;  // already behind
           // Both ends held to this plane by their own guards hold the edge (g is linear along it).
