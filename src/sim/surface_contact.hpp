@@ -124,8 +124,10 @@
 // its own or neighbouring copies and never listed, so the work goes with the pairs of copies that
 // can really touch (per primitive queries were 100 times slower on a fine embedded surface). The
 // candidates (all pairs within rho at the reference positions) serve every evaluation whose
-// vertices have moved less than (rho - dhat) / 2 from there (a Verlet list), and are rebuilt
-// otherwise. Under them a coarser Verlet list of the pairs of copies, found within rho plus room
+// vertices have moved less than (rho - dhat) / 2 from there (a Verlet list), and every move of
+// conservative advancement whose two ends have, and are rebuilt otherwise; a list made for a move
+// is made around the move's end with room for the move back and as much again beyond (a piece
+// sliding along another goes on the same way in the next move). Under them a coarser Verlet list of the pairs of copies, found within rho plus room
 // for 10 dhat of motion by a self-join of a box hierarchy over the copies (refitted), serves
 // several rebuilds. Motions are measured by the nodes first (O(nodes)), by the vertices where that
 // bound is too loose (O(V)); a list kept with no candidates places no vertex. O(V + F + copy pairs
@@ -306,8 +308,13 @@ class SurfaceContact {
   /// the sliced hand, were a serial loop over the candidates each evaluation), visited in order.
   void collect_active(const Points& at);
   std::vector<std::vector<ActiveTerm>> active_;  // per chunk; kept, so that nothing is allocated
-  /// Makes the candidates cover positions `at` and motions of up to `sweep` from there.
-  void cover(const Points& at, double sweep);
+  /// Makes the candidates cover positions `at` and, where given, the straight move from there to
+  /// `move_end` (node positions), which moves the vertices by at most `sweep` relative to each
+  /// other's centre.
+  void cover(const Points& at, const Points* move_end, double sweep);
+  Points move_end_;  // max_step's scratch
+  // Whether the list was made around the positions y_ it was made at (else around a move's end).
+  bool reference_is_now_ = true;
   /// How far the surface vertices move, beyond a motion common to all, when each node n moves
   /// by node_motion(n) (a Vec3): the largest distance of a vertex's motion from the centre of
   /// their box. O(V), in parallel.

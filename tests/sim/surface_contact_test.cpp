@@ -703,6 +703,55 @@ TEST(SurfaceContact, AWildDirectionIsShortenedToTheTrustRegion) {
   EXPECT_EQ(contact.max_step(mesh.rest(), direction.data()), 1);
 }
 
+// A piece sliding along another moves on the same way move after move: the candidate list made
+// for one move is made around its end, and serves the next (before, each move after the first
+// needed a new list). The list must still hold every pair within the thickness anywhere along
+// each move: checked by brute force at the moves' ends and middles.
+TEST(SurfaceContact, AListMadeForAMoveServesTheNextMoveTheSameWay) {
+  const double dhat = 0.01;
+  const TetMesh mesh = two_blocks(0.5 * dhat);
+  Cutter cutter(mesh);
+  const MaterialSurface surface = cutter.surface();
+  const auto& copies = cutter.tet_nodes();
+  sim::detail::SurfaceContact contact;
+  start_contact(surface, copies, mesh.rest(), mesh.rest(), dhat, &contact);
+  // The upper block slides sideways by 1.5 dhat a move, half a thickness above the lower one.
+  std::vector<double> direction(3 * static_cast<std::size_t>(mesh.num_nodes()), 0.0);
+  Points move = Points::Zero(mesh.num_nodes(), 3);
+  for (Index v = 0; v < mesh.num_nodes(); ++v) {
+    if (mesh.rest()(v, 2) > 1) direction[3 * v] = move(v, 0) = 1.5 * dhat;
+  }
+  const TriangleSurface& s = surface.surface;
+  const Points rest_vertices = surface.positions(copies, mesh.rest());
+  // Every vertex-triangle pair of the two blocks within dhat at node positions x is listed.
+  const auto all_near_pairs_listed = [&](const Points& x) {
+    std::vector<std::array<Index, 3>> listed = contact.candidate_pairs();
+    std::sort(listed.begin(), listed.end());
+    const Points at = surface.positions(copies, x);
+    Index near = 0, missing = 0;
+    for_each_vertex_near_triangle(s, at, dhat, [&](Index v, Index t) {
+      if ((rest_vertices(v, 2) > 1) == (rest_vertices(s.triangles(t, 0), 2) > 1)) return;  // the same block
+      const collision::Proximity p = collision::point_triangle(at.row(v).transpose(), at.row(s.triangles(t, 0)).transpose(),
+                                                               at.row(s.triangles(t, 1)).transpose(), at.row(s.triangles(t, 2)).transpose());
+      if (!(p.distance < dhat)) return;
+      ++near;
+      if (!std::binary_search(listed.begin(), listed.end(), std::array<Index, 3>{0, v, t})) ++missing;
+    });
+    EXPECT_GT(near, 0);
+    return missing == 0;
+  };
+  Points x = mesh.rest();
+  const Index rebuilds_before = contact.num_rebuilds();
+  for (int k = 0; k < 4; ++k) {
+    ASSERT_EQ(contact.max_step(x, direction.data()), 1) << "move " << k;  // sliding: nothing comes closer
+    EXPECT_TRUE(all_near_pairs_listed(x + 0.5 * move)) << "move " << k;
+    EXPECT_TRUE(all_near_pairs_listed(x + move)) << "move " << k;
+    x += move;
+  }
+  // Four moves, two lists (one per move before).
+  EXPECT_EQ(contact.num_rebuilds() - rebuilds_before, 2);
+}
+
 TEST(SurfaceContact, FrictionGradientAndHessianMatchFiniteDifferences) {
   const Vec3 n = Vec3(0.2, -0.3, 1).normalized();
   const double eps = 1e-3, mu = 0.4, force = 30;
