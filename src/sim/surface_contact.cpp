@@ -912,42 +912,47 @@ void SurfaceContact::mark_joined() {
   // copy and its corners' copies may differ: a triangle's vertices can be embedded in its
   // neighbours).
   const auto sutured = [&](Index copy) { return static_cast<std::size_t>(copy) < sutured_.size() && sutured_[static_cast<std::size_t>(copy)] != 0; };
-  for (Candidate& c : candidates_) {
-    // Of joined copies, only the pairs that touch in the material (within the guards' allowance):
-    // the two sides of the cut. Their other pairs, apart when the cut was made, collide as any
-    // others: sticks sliding along each other while their cut faces still touch somewhere, and
-    // faces of neighbouring sticks a sliver apart (a cut 0.0123 from a lattice plane), whose
-    // barrier, finite there, starts active.
-    // Of neighbouring copies, joined for good: pairs near in the material, guarded where they face.
-    c.joined = c.rest_touching && (c.neighbouring || std::binary_search(joins_.begin(), joins_.end(), c.copies)) ? 1 : 0;
-    c.sutured = 0;
-    if (sutured_.empty()) continue;
-    const std::array<Index, 4> k = corners(c);
-    if (c.rest_close) {
-      for (const Index v : k) {
-        if (sutured(vertex_copy_[static_cast<std::size_t>(v)])) c.sutured = 1;
+  // Each candidate on its own, in parallel: run after every rebuild and whenever joins end (every
+  // step while a piece slides off the cut it was joined across), over lists of 25k to 80k pairs.
+  for_chunks(static_cast<Index>(candidates_.size()), kNodeChunk, [&](Index begin, Index end, Index) {
+    for (Index index = begin; index < end; ++index) {
+      Candidate& c = candidates_[static_cast<std::size_t>(index)];
+      // Of joined copies, only the pairs that touch in the material (within the guards' allowance):
+      // the two sides of the cut. Their other pairs, apart when the cut was made, collide as any
+      // others: sticks sliding along each other while their cut faces still touch somewhere, and
+      // faces of neighbouring sticks a sliver apart (a cut 0.0123 from a lattice plane), whose
+      // barrier, finite there, starts active.
+      // Of neighbouring copies, joined for good: pairs near in the material, guarded where they face.
+      c.joined = c.rest_touching && (c.neighbouring || std::binary_search(joins_.begin(), joins_.end(), c.copies)) ? 1 : 0;
+      c.sutured = 0;
+      if (sutured_.empty()) continue;
+      const std::array<Index, 4> k = corners(c);
+      if (c.rest_close) {
+        for (const Index v : k) {
+          if (sutured(vertex_copy_[static_cast<std::size_t>(v)])) c.sutured = 1;
+        }
+      }
+      const int first_of_b = c.edges ? 2 : 1;
+      // Or two neighbouring copies with corners in sutured copies on both sides: near an incision's
+      // end, where the two sides' copies share nodes, the springs squeeze the wound shut, pressing
+      // pairs 3 to 8 dhat apart in the material into each other (the lip incision: 17 such pairs
+      // held the springs off, and Newton stalled for two steps as they came in).
+      if (c.neighbouring) {
+        bool first_side = false, second_side = false;
+        for (int i = 0; i < 4; ++i) (i < first_of_b ? first_side : second_side) |= sutured(vertex_copy_[static_cast<std::size_t>(k[i])]);
+        if (first_side && second_side) c.sutured = 1;
+      }
+      // Or two copies one spring holds together, wherever in them: the springs pull the whole of
+      // both into place, squeezing pairs that were a little further apart than dhat (measured on
+      // the lip incision: pairs 1.6 to 1.9 dhat apart in the material pressed to 0.5 dhat).
+      for (int i = 0; i < first_of_b && !c.sutured; ++i) {
+        for (int j = first_of_b; j < 4 && !c.sutured; ++j) {
+          const std::uint64_t key = copy_pair(vertex_copy_[static_cast<std::size_t>(k[i])], vertex_copy_[static_cast<std::size_t>(k[j])]);
+          if (std::binary_search(suture_pairs_.begin(), suture_pairs_.end(), key)) c.sutured = 1;
+        }
       }
     }
-    const int first_of_b = c.edges ? 2 : 1;
-    // Or two neighbouring copies with corners in sutured copies on both sides: near an incision's
-    // end, where the two sides' copies share nodes, the springs squeeze the wound shut, pressing
-    // pairs 3 to 8 dhat apart in the material into each other (the lip incision: 17 such pairs
-    // held the springs off, and Newton stalled for two steps as they came in).
-    if (c.neighbouring) {
-      bool first_side = false, second_side = false;
-      for (int i = 0; i < 4; ++i) (i < first_of_b ? first_side : second_side) |= sutured(vertex_copy_[static_cast<std::size_t>(k[i])]);
-      if (first_side && second_side) c.sutured = 1;
-    }
-    // Or two copies one spring holds together, wherever in them: the springs pull the whole of
-    // both into place, squeezing pairs that were a little further apart than dhat (measured on
-    // the lip incision: pairs 1.6 to 1.9 dhat apart in the material pressed to 0.5 dhat).
-    for (int i = 0; i < first_of_b && !c.sutured; ++i) {
-      for (int j = first_of_b; j < 4 && !c.sutured; ++j) {
-        const std::uint64_t key = copy_pair(vertex_copy_[static_cast<std::size_t>(k[i])], vertex_copy_[static_cast<std::size_t>(k[j])]);
-        if (std::binary_search(suture_pairs_.begin(), suture_pairs_.end(), key)) c.sutured = 1;
-      }
-    }
-  }
+  });
   sutures_changed_ = false;
 }
 
@@ -1189,18 +1194,25 @@ void SurfaceContact::update_joins(const Points& at) {
   // Touching by a vertex-triangle pair (most joins), else by an edge pair, measured only for
   // the joins the first left untouched.
   measure(Measure::kJoinedVertexTriangle);
+  // Both passes in parallel, each chunk listing the joins it found touching.
   std::vector<std::uint8_t> touching(joins_.size(), 0);
   const auto join_of = [&](const Candidate& c) {
     return static_cast<std::size_t>(std::lower_bound(joins_.begin(), joins_.end(), c.copies) - joins_.begin());
   };
-  for (std::size_t k = 0; k < candidates_.size(); ++k) {
-    const Candidate& c = candidates_[k];
-    if (!c.joined || c.neighbouring || c.edges || !(proximities_[k].distance < settings_.thickness)) continue;
-    touching[join_of(c)] = 1;
-  }
-  for (const Candidate& c : candidates_) {
-    if (!c.joined || c.neighbouring || !c.edges || touching[join_of(c)]) continue;
-    if (proximity(c, y_).distance < settings_.thickness) touching[join_of(c)] = 1;
+  const auto K = static_cast<Index>(candidates_.size());
+  for (const bool edges : {false, true}) {
+    std::vector<std::size_t> found;
+    append_chunks(K, kNodeChunk, &found, [&](Index begin, Index end, std::vector<std::size_t>* out) {
+      for (Index k = begin; k < end; ++k) {
+        const Candidate& c = candidates_[static_cast<std::size_t>(k)];
+        if (!c.joined || c.neighbouring || (c.edges != 0) != edges) continue;
+        const std::size_t join = join_of(c);
+        if (touching[join]) continue;
+        const double distance = edges ? proximity(c, y_).distance : proximities_[k].distance;
+        if (distance < settings_.thickness) out->push_back(join);
+      }
+    });
+    for (const std::size_t join : found) touching[join] = 1;
   }
   std::size_t kept = 0;
   for (std::size_t j = 0; j < joins_.size(); ++j) {
