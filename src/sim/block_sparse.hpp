@@ -56,6 +56,17 @@ double sum_chunks(Index count, Index chunk, std::vector<double>* partial, const 
   return total;
 }
 
+/// The least of least(begin, end) over the fixed chunks of [0, count) and `bound` (the answer
+/// when count is 0). Exact on any number of threads. `partial` is scratch.
+template <typename Least>
+double min_chunks(Index count, Index chunk, double bound, std::vector<double>* partial, const Least& least) {
+  partial->assign(static_cast<std::size_t>((count + chunk - 1) / chunk), bound);
+  for_chunks(count, chunk, [&](Index begin, Index end, Index c) { (*partial)[c] = least(begin, end); });
+  double result = bound;
+  for (const double value : *partial) result = std::min(result, value);
+  return result;
+}
+
 /// Calls body(begin, end, out) over the fixed chunks of [0, count), in parallel, each chunk
 /// appending its findings to a vector `out` of its own, and appends those to *into in chunk
 /// order: the result does not depend on the number of threads.

@@ -691,7 +691,6 @@ void SurfaceContact::cover(const Points& at, const Points* move_end, double swee
   // step, 62 rebuilds in its first 60 steps became 30 (the list was made around the move's start,
   // and each step's second move, the Newton step after the first guess CCD had shortened, went
   // past it); the folded flap 89 in 60 steps became 39, the hanging femur 78 in 60 became 41.
-  reference_is_now_ = move_end == nullptr;
   if (move_end) {
     reference_nodes_ = *move_end;
     place(reference_nodes_, &reference_);
@@ -699,10 +698,10 @@ void SurfaceContact::cover(const Points& at, const Points* move_end, double swee
     reference_ = y_;
     reference_nodes_ = at;
   }
-  rebuild(2 * dhat + 2 * sweep);
+  rebuild(2 * dhat + 2 * sweep, move_end == nullptr);
 }
 
-void SurfaceContact::rebuild(double rho) {
+void SurfaceContact::rebuild(double rho, bool made_now) {
   rho_ = rho;
   measured_ = -1;
   ++rebuilds_;
@@ -758,7 +757,7 @@ void SurfaceContact::rebuild(double rho) {
       // Now is y_, not a move's end the list was made around (where a move not yet shortened by
       // CCD may have brought pairs to 0).
       bool touching = !(apart > 0);
-      if (!reference_is_now_) {
+      if (!made_now) {
         const std::array<Vec3, 4> at = corner_positions(c, y_);
         touching = !(gap_between(at, c.edges) > 0) && !(proximity_at(at, c.edges).distance > 0);
       }
@@ -984,8 +983,7 @@ double SurfaceContact::max_step(const Points& from, const double* direction) {
   const auto node_motion = [&](Index n) { return Vec3(share * motion.row(n).transpose()); };
   move_end_ = from + share * motion;
   cover(from, &move_end_, sweep);
-  std::vector<double> smallest(static_cast<std::size_t>((static_cast<Index>(candidates_.size()) + kNodeChunk - 1) / kNodeChunk) + 1, 1.0);
-  for_chunks(static_cast<Index>(candidates_.size()), kNodeChunk, [&](Index begin, Index end, Index chunk) {
+  const double t_pairs = min_chunks(static_cast<Index>(candidates_.size()), kNodeChunk, 1.0, &chunk_least_, [&](Index begin, Index end) {
     double t_min = 1;
     for (Index k = begin; k < end; ++k) {
       const Candidate& c = candidates_[k];
@@ -1036,12 +1034,10 @@ double SurfaceContact::max_step(const Points& from, const double* direction) {
       }
       t_min = std::min(t_min, t);
     }
-    smallest[static_cast<std::size_t>(chunk)] = t_min;
+    return t_min;
   });
   // The guards, in parallel too (up to 40k right after the hand is cut in two).
-  const auto guard_count = static_cast<Index>(guards_.size());
-  std::vector<double> guard_smallest(static_cast<std::size_t>((guard_count + kNodeChunk - 1) / kNodeChunk) + 1, 1.0);
-  for_chunks(guard_count, kNodeChunk, [&](Index begin, Index end, Index chunk) {
+  const double t_guard = min_chunks(static_cast<Index>(guards_.size()), kNodeChunk, 1.0, &chunk_least_, [&](Index begin, Index end) {
     double t_min = 1;
     for (Index k = begin; k < end; ++k) {
       const Guard& guard = guards_[static_cast<std::size_t>(k)];
@@ -1056,10 +1052,9 @@ double SurfaceContact::max_step(const Points& from, const double* direction) {
       // allowance is used up.
       if (rate < 0) t_min = std::min(t_min, std::max(0.0, (1 - kKeepShare) * (g - guard.zero + guard.wall) / -rate));
     }
-    guard_smallest[static_cast<std::size_t>(chunk)] = t_min;
+    return t_min;
   });
-  const double t_guard = *std::min_element(guard_smallest.begin(), guard_smallest.end());
-  return std::min(t_guard, share * *std::min_element(smallest.begin(), smallest.end()));
+  return std::min(t_guard, share * t_pairs);
 }
 
 double SurfaceContact::guard_zero(const std::array<Index, 4>& corner, const std::array<double, 4>& w, Index triangle) const {

@@ -127,8 +127,9 @@
 // vertices have moved less than (rho - dhat) / 2 from there (a Verlet list), and every move of
 // conservative advancement whose two ends have, and are rebuilt otherwise; a list made for a move
 // is made around the move's end with room for the move back and as much again beyond (a piece
-// sliding along another goes on the same way in the next move). Under them a coarser Verlet list of the pairs of copies, found within rho plus room
-// for 10 dhat of motion by a self-join of a box hierarchy over the copies (refitted), serves
+// sliding along another goes on the same way in the next move). Under them a coarser Verlet list
+// of the pairs of copies, found within rho plus room for 10 dhat of motion by a self-join of a box
+// hierarchy over the copies (refitted), serves
 // several rebuilds. Motions are measured by the nodes first (O(nodes)), by the vertices where that
 // bound is too loose (O(V)); a list kept with no candidates places no vertex. O(V + F + copy pairs
 // x their primitives) per rebuild, O(C log C + copy pairs) more when the pairs are found again,
@@ -313,8 +314,7 @@ class SurfaceContact {
   /// other's centre.
   void cover(const Points& at, const Points* move_end, double sweep);
   Points move_end_;  // max_step's scratch
-  // Whether the list was made around the positions y_ it was made at (else around a move's end).
-  bool reference_is_now_ = true;
+  std::vector<double> chunk_least_;  // max_step's scratch (min_chunks)
   /// How far the surface vertices move, beyond a motion common to all, when each node n moves
   /// by node_motion(n) (a Vec3): the largest distance of a vertex's motion from the centre of
   /// their box. O(V), in parallel.
@@ -323,7 +323,9 @@ class SurfaceContact {
   /// A bound of the same for the nodes moving from `since` to `at`, exact (as above) unless a
   /// cheaper one, from the nodes alone, is within `allowed` already.
   double motion_since(const Points& at, const Points& since, double allowed) const;
-  void rebuild(double rho);
+  /// Lists the candidates within rho at reference_: made at y_ (`made_now`), or around a move's
+  /// end, where whether a pair touches now is still measured at y_.
+  void rebuild(double rho, bool made_now);
   /// Makes copy_pairs_ hold every pair of copies whose boxes (copy_boxes_) are within rho of each
   /// other: kept while the vertices' motion since it was made allows, else made again with room
   /// for kPairSlack * dhat more of it (on the hanging femur, 2 remade it at 75 of 105 rebuilds
