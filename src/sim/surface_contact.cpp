@@ -200,7 +200,7 @@ void SurfaceContact::clear_surface() {
   friction_.clear();
   guards_.clear();
   rho_ = -1;
-  measured_ = -1;
+  forget_measures();
   tree_built_ = false;
   pairs_radius_ = -1;
   group_copy_.clear();
@@ -514,10 +514,11 @@ bool SurfaceContact::across_one_cut(const Candidate& c) const {
 
 collision::Proximity SurfaceContact::proximity(const Candidate& c, const Points& y) const { return proximity_at(corner_positions(c, y), c.edges); }
 
-ContactTerm SurfaceContact::term(const Candidate& c, const collision::Proximity& p) const {
+ContactTerm SurfaceContact::term(const Candidate& c, const collision::Proximity& p) const { return term(corners(c), p); }
+
+ContactTerm SurfaceContact::term(const std::array<Index, 4>& k, const collision::Proximity& p) const {
   ContactTerm t;
   t.proximity = p;
-  const std::array<Index, 4> k = corners(c);
   for (int corner = 0; corner < 4; ++corner) {
     if (p.w[corner] == 0) continue;
     const auto v = static_cast<std::size_t>(k[corner]);
@@ -537,9 +538,24 @@ ContactTerm SurfaceContact::term(const Candidate& c, const collision::Proximity&
   return t;
 }
 
+double SurfaceContact::guard_gap(const Guard& guard, const Points& y) {
+  Vec3 r = Vec3::Zero();
+  for (int i = 0; i < 4; ++i) r += guard.w[i] * y.row(guard.corner[i]).transpose();
+  return guard.normal.dot(r) - guard.zero;
+}
+
+ContactTerm SurfaceContact::guard_term(const Guard& guard) const {
+  collision::Proximity foot;
+  foot.w = guard.w;
+  foot.r = guard.start_r;
+  foot.distance = guard.start_distance;
+  return term(guard.corner, foot);
+}
+
 void SurfaceContact::collect_active(const Points& at) {
   cover(at, nullptr, 0);
-  measure(Measure::kCounted);
+  if (active_current_ && active_at_.rows() == at.rows() && active_at_ == at) return;
+  measure(kCounted);
   const double dhat = settings_.thickness, kappa = settings_.stiffness;
   constexpr double kInfinity = std::numeric_limits<double>::infinity();
   const auto K = static_cast<Index>(candidates_.size()), guard_count = static_cast<Index>(guards_.size());
@@ -568,41 +584,31 @@ void SurfaceContact::collect_active(const Points& at) {
     for (Index k = first; k < std::min(guard_count, first + kNodeChunk); ++k) {
       const Guard& guard = guards_[static_cast<std::size_t>(k)];
       const double wall = guard.wall;
-      Vec3 r = Vec3::Zero();
-      for (int a = 0; a < guard.term.count; ++a) r += guard.term.coefficients[a] * at.row(guard.term.nodes[a]).transpose();
-      const double g = guard.normal.dot(r) - guard.zero;
+      const double g = guard_gap(guard, y_);  // y_: the vertices at `at` (cover)
       if (g >= 0) continue;
       if (!(g + wall > 0)) {
-        out.push_back({guard.term, kInfinity, Vec3::Zero(), Mat3::Zero()});
+        out.push_back({guard_term(guard), kInfinity, Vec3::Zero(), Mat3::Zero()});
         continue;
       }
-      out.push_back({guard.term, kappa * barrier(g + wall, wall), kappa * barrier_first(g + wall, wall) * guard.normal,
+      out.push_back({guard_term(guard), kappa * barrier(g + wall, wall), kappa * barrier_first(g + wall, wall) * guard.normal,
                      kappa * barrier_second(g + wall, wall) * guard.normal * guard.normal.transpose()});
     }
   });
+  active_at_ = at;
+  active_current_ = true;
 }
 
-void SurfaceContact::measure(Measure which) {
-  const int have = measured_;
-  if (have == static_cast<int>(Measure::kAll) || have == static_cast<int>(which) ||
-      (have == static_cast<int>(Measure::kJoined) && which == Measure::kJoinedVertexTriangle)) {
-    return;
-  }
-  measured_ = static_cast<int>(which);
+void SurfaceContact::measure(unsigned which) {
+  const unsigned missing = which & ~measured_;
+  if (missing == 0) return;
+  measured_ |= missing;
   proximities_.resize(candidates_.size());
   for_chunks(static_cast<Index>(candidates_.size()), kNodeChunk, [&](Index begin, Index end, Index) {
     for (Index k = begin; k < end; ++k) {
       const Candidate& c = candidates_[k];
-      const bool skip = which == Measure::kCounted                ? (c.joined || c.sutured)
-                        : which == Measure::kJoined               ? !c.joined
-                        : which == Measure::kJoinedVertexTriangle ? (!c.joined || c.edges)
-                                                                  : false;
+      if (!(kind(c) & missing)) continue;
       // Every reader asks only whether a pair is within the thickness: those surely beyond it
       // are left at infinity unmeasured.
-      if (skip) {
-        proximities_[k].distance = std::numeric_limits<double>::infinity();
-        continue;
-      }
       measure_within(corner_positions(c, y_), c.edges, settings_.thickness, &proximities_[k]);
     }
   });
@@ -670,19 +676,19 @@ void SurfaceContact::cover(const Points& at, const Points* move_end, double swee
     if (2 * std::max(moved, moving) + dhat <= rho_) {
       // The list holds: the vertices are placed only where there are candidates to measure.
       if (candidates_.empty()) {
-        measured_ = -1;
+        forget_measures();
         return;
       }
       place(at, &placed_);
       if (placed_.rows() != y_.rows() || placed_ != y_) {
         y_.swap(placed_);
-        measured_ = -1;
+        forget_measures();
       }
       return;
     }
   }
   place(at, &y_);
-  measured_ = -1;
+  forget_measures();
   // The list is made around the move's end, with room for the whole move back to `at` and for
   // as much again beyond it, and dhat / 2 more (more slack, for one more move like this one, was
   // measured slower on the hanging femur: its larger lists cost more than the rebuilds they
@@ -703,7 +709,7 @@ void SurfaceContact::cover(const Points& at, const Points* move_end, double swee
 
 void SurfaceContact::rebuild(double rho, bool made_now) {
   rho_ = rho;
-  measured_ = -1;
+  forget_measures();
   ++rebuilds_;
   const Points& y = reference_;
   const auto corner = [&](Index v) { return Vec3(y.row(v).transpose()); };
@@ -906,7 +912,7 @@ void SurfaceContact::cover_copy_pairs(double rho) {
 }
 
 void SurfaceContact::mark_joined() {
-  measured_ = -1;  // which pairs count has changed
+  forget_measures();  // which pairs count has changed
   // Sutured: close in the material, with a corner in a copy a spring holds (a primitive's own
   // copy and its corners' copies may differ: a triangle's vertices can be embedded in its
   // neighbours).
@@ -981,6 +987,7 @@ double SurfaceContact::max_step(const Points& from, const double* direction) {
   // The move considered: the direction, shortened to the trust region where it goes beyond it.
   const double share = std::min(1.0, kMaxSweep * settings_.thickness / whole_sweep), sweep = share * whole_sweep;
   const auto node_motion = [&](Index n) { return Vec3(share * motion.row(n).transpose()); };
+  const auto whole_motion = [&](Index n) { return Vec3(motion.row(n).transpose()); };
   move_end_ = from + share * motion;
   cover(from, &move_end_, sweep);
   const double t_pairs = min_chunks(static_cast<Index>(candidates_.size()), kNodeChunk, 1.0, &chunk_least_, [&](Index begin, Index end) {
@@ -1036,21 +1043,18 @@ double SurfaceContact::max_step(const Points& from, const double* direction) {
     }
     return t_min;
   });
-  // The guards, in parallel too (up to 40k right after the hand is cut in two).
   const double t_guard = min_chunks(static_cast<Index>(guards_.size()), kNodeChunk, 1.0, &chunk_least_, [&](Index begin, Index end) {
     double t_min = 1;
     for (Index k = begin; k < end; ++k) {
       const Guard& guard = guards_[static_cast<std::size_t>(k)];
-      double g = 0, rate = 0;
-      for (int a = 0; a < guard.term.count; ++a) {
-        const auto node = static_cast<std::size_t>(guard.term.nodes[a]);
-        const Vec3 x(from.row(guard.term.nodes[a]).transpose()), d(direction[3 * node], direction[3 * node + 1], direction[3 * node + 2]);
-        g += guard.term.coefficients[a] * guard.normal.dot(x);
-        rate += guard.term.coefficients[a] * guard.normal.dot(d);
+      Vec3 motion_r = Vec3::Zero();
+      for (int i = 0; i < 4; ++i) {
+        if (guard.w[i] != 0) motion_r += guard.w[i] * embedded(guard.corner[i], whole_motion);
       }
+      const double rate = guard.normal.dot(motion_r);
       // g is linear along the step: stop where all but kKeepShare of what was left of the
-      // allowance is used up.
-      if (rate < 0) t_min = std::min(t_min, std::max(0.0, (1 - kKeepShare) * (g - guard.zero + guard.wall) / -rate));
+      // allowance is used up. (y_: the vertices at `from`, see cover.)
+      if (rate < 0) t_min = std::min(t_min, std::max(0.0, (1 - kKeepShare) * (guard_gap(guard, y_) + guard.wall) / -rate));
     }
     return t_min;
   });
@@ -1068,9 +1072,10 @@ double SurfaceContact::guard_zero(const std::array<Index, 4>& corner, const std:
 
 void SurfaceContact::lag_guards(const Points& start) {
   guards_.clear();
+  active_current_ = false;
   if (!enabled() || (joins_.empty() && group_facing_.empty())) return;
   cover(start, nullptr, 0);
-  measure(Measure::kJoined);
+  measure(kJoined);
   const double dhat = settings_.thickness, delta = guard_allowance();
   struct Found {
     Index vertex;
@@ -1135,9 +1140,8 @@ void SurfaceContact::lag_guards(const Points& start) {
       bool same_plane = false;
       for (std::size_t h = first_guard; h < guards_.size() && !same_plane; ++h) same_plane = guards_[h].normal.dot(found[j].normal) > 1 - kSamePlane;
       if (same_plane) continue;
-      collision::Proximity foot;
-      foot.w = {1.0, -found[j].beta[0], -found[j].beta[1], -found[j].beta[2]};
-      guards_.push_back({term(candidates_[found[j].k], foot), found[j].normal, found[j].zero, found[j].wall});
+      guards_.push_back({corners(candidates_[found[j].k]), {1.0, -found[j].beta[0], -found[j].beta[1], -found[j].beta[2]}, found[j].normal,
+                         found[j].zero, found[j].wall, Vec3::Zero(), 0.0});
       guard_vertex.push_back(found[j].vertex);
     }
     i = end;
@@ -1183,7 +1187,8 @@ void SurfaceContact::lag_guards(const Points& start) {
           if (!(g > -delta)) continue;  // already behind
           // Both ends held to this plane by their own guards hold the edge (g is linear along it).
           if (held(corner[static_cast<std::size_t>(first)], normal) && held(corner[static_cast<std::size_t>(first) + 1], normal)) continue;
-          out->push_back({term(c, foot), normal, zero, guard_wall(g, delta)});
+          // Its friction's start: r turned as the guard's (from the faces to the first edge).
+          out->push_back({corner, foot.w, normal, zero, guard_wall(g, delta), sign * p.r, p.distance});
         }
       }
     }
@@ -1193,9 +1198,9 @@ void SurfaceContact::lag_guards(const Points& start) {
 void SurfaceContact::update_joins(const Points& at) {
   if (!enabled() || joins_.empty()) return;
   cover(at, nullptr, 0);
-  // Touching by a vertex-triangle pair (most joins), else by an edge pair, measured only for
-  // the joins the first left untouched.
-  measure(Measure::kJoinedVertexTriangle);
+  // Every pair of joined copies is measured: the next step's guards, which start here, look at
+  // them all. A join touches by a vertex-triangle pair (most joins), else by an edge pair.
+  measure(kJoined);
   // Both passes in parallel, each chunk listing the joins it found touching.
   std::vector<std::uint8_t> touching(joins_.size(), 0);
   const auto join_of = [&](const Candidate& c) {
@@ -1209,9 +1214,7 @@ void SurfaceContact::update_joins(const Points& at) {
         const Candidate& c = candidates_[static_cast<std::size_t>(k)];
         if (!c.joined || c.neighbouring || (c.edges != 0) != edges) continue;
         const std::size_t join = join_of(c);
-        if (touching[join]) continue;
-        const double distance = edges ? proximity(c, y_).distance : proximities_[k].distance;
-        if (distance < settings_.thickness) out->push_back(join);
+        if (!touching[join] && proximities_[k].distance < settings_.thickness) out->push_back(join);
       }
     });
     for (const std::size_t join : found) touching[join] = 1;
@@ -1222,7 +1225,13 @@ void SurfaceContact::update_joins(const Points& at) {
   }
   if (kept == joins_.size()) return;
   joins_.resize(kept);
+  // The pairs that count from now on were measured here as joined pairs, and none is within dhat
+  // (a join ends only then): what was measured, and the active terms at these positions, hold.
+  const unsigned measured = measured_;
+  const bool active = active_current_;
   mark_joined();
+  measured_ = measured;
+  active_current_ = active;
 }
 
 }  // namespace tetcut::sim::detail

@@ -309,6 +309,10 @@ class SurfaceContact {
   /// the sliced hand, were a serial loop over the candidates each evaluation), visited in order.
   void collect_active(const Points& at);
   std::vector<std::vector<ActiveTerm>> active_;  // per chunk; kept, so that nothing is allocated
+  // Whether active_ holds the terms at node positions active_at_: the last evaluation of a step
+  // is where its end counts the active pairs.
+  bool active_current_ = false;
+  Points active_at_;
   /// Makes the candidates cover positions `at` and, where given, the straight move from there to
   /// `move_end` (node positions), which moves the vertices by at most `sweep` relative to each
   /// other's centre.
@@ -339,12 +343,22 @@ class SurfaceContact {
   void group_primitives(const Listing& vertices, const Listing& edges);
   /// The candidates' joined and sutured flags, from joins_ and sutured_.
   void mark_joined();
-  /// proximities_ of the candidates at y_, in parallel: every one, those the barrier counts, the
-  /// pairs of joined copies (what the joins look at) or their vertex-triangle pairs (what the
-  /// guards look at); the others' distances left at infinity. Right after a cut most of the list
-  /// is joined pairs.
-  enum class Measure { kAll, kCounted, kJoined, kJoinedVertexTriangle };
-  void measure(Measure which = Measure::kAll);
+  /// proximities_ of the candidates at y_, in parallel, by kind (bits, which may be combined):
+  /// those the barrier counts, the joined copies' vertex-triangle pairs (what the guards and the
+  /// joins look at) or edge pairs, the others (sutured). Kinds measured at y_ already are kept,
+  /// so that a step's end (the joins, then the count of active pairs) and the next step's start
+  /// (the guards) measure each pair once; the kinds not asked for may hold anything. Right after
+  /// a cut most of the list is joined pairs.
+  enum Measure : unsigned { kCounted = 1, kJoinedVertexTriangle = 2, kJoinedEdges = 4, kJoined = 6, kOther = 8, kAll = 15 };
+  static unsigned kind(const Candidate& c) {
+    return c.joined ? (c.edges ? kJoinedEdges : kJoinedVertexTriangle) : c.sutured ? kOther : kCounted;
+  }
+  void measure(unsigned which = kAll);
+  /// The positions changed, or which pairs count: nothing measured or collected holds.
+  void forget_measures() {
+    measured_ = 0;
+    active_current_ = false;
+  }
   collision::Proximity proximity(const Candidate& c, const Points& y) const;
   /// Whether a pair lies on the two sides of one cut in the material: all four corners within the
   /// guards' allowance of the plane of the second primitive's triangle or of one around its
@@ -364,6 +378,8 @@ class SurfaceContact {
   std::array<Vec3, 4> corner_positions(const Candidate& c, const Points& y) const;
   std::array<Index, 4> corners(const Candidate& c) const;
   ContactTerm term(const Candidate& c, const collision::Proximity& p) const;
+  /// The term of r = sum_i w_i corner_i (the weights p.w) in the nodes.
+  ContactTerm term(const std::array<Index, 4>& corner, const collision::Proximity& p) const;
   bool neighbours(Index copy_a, Index copy_b) const;
   /// Whether two copies have corners at one rest point: copies of one tet, or of neighbours,
   /// before the cuts that separated them.
@@ -393,16 +409,27 @@ class SurfaceContact {
     double normal_force;
   };
   std::vector<FrictionPair> friction_;
-  // Guards of joined pairs for the current step: r = vertex - its foot on the triangle (the
-  // foot's barycentric coordinates held), g = normal . r.
+  // Guards of joined pairs for the current step: r = sum_i w_i corner_i (a vertex less its foot on
+  // the triangle, the foot's barycentric coordinates held; or the vector between two edges'
+  // closest points), g = normal . r. Kept small (about a third of a ContactTerm): there are up to
+  // 40k of them a step, read by every evaluation and every move of CCD, and only the few pushed
+  // behind their zero become terms (guard_term).
   struct Guard {
-    ContactTerm term;
+    std::array<Index, 4> corner;
+    std::array<double, 4> w;
     Vec3 normal;
     double zero;  // where the barrier starts: the pair's g in the material if behind, less the slack
     // How far behind its zero the barrier's wall stands: 0.9 of the allowance, or a little deeper
     // than a pair found behind that at the step's start (see lag_guards).
     double wall;
+    // An edge guard's r and distance at the step's start (its lagged friction's normal and
+    // start); a vertex guard's are zero (no friction).
+    Vec3 start_r;
+    double start_distance;
   };
+  /// A guard's g at vertex positions y, less its zero.
+  static double guard_gap(const Guard& guard, const Points& y);
+  ContactTerm guard_term(const Guard& guard) const;
   /// A guard's zero: its g in the material where the pair lay behind the plane there (the rims of
   /// cuts that meet at a junction, whose faces were triangulated apart), so that no guard pushes
   /// at rest; less kGuardSlack of the allowance, so that sides that coincide up to rounding load
@@ -429,9 +456,8 @@ class SurfaceContact {
   // Scratch of surface_motion, per chunk of vertices.
   mutable std::vector<spatial::Aabb> motion_boxes_;
   mutable std::vector<double> motion_largest_;
-  // What proximities_ hold for the candidates at y_ (a Measure), or -1: a step's end (the joins)
-  // and the next step's start (the guards) measure the same positions.
-  int measured_ = -1;
+  // The kinds of candidates proximities_ hold at y_ (Measure bits).
+  unsigned measured_ = 0;
   double rho_ = -1;
   // The primitives by copy (CSR over group_copy_, the copies that own primitives, ascending), and
   // a box hierarchy over each copy's primitives. A vertex is listed by its own copy and by the
