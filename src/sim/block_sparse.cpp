@@ -38,10 +38,11 @@ struct RowScratch {
 }  // namespace
 
 void BlockSparseMatrix::build(Index num_nodes, std::span<const std::array<Index, 4>> tets, std::span<const std::array<Index, 8>> extra,
-                              std::vector<std::array<Index, 16>>* tet_slots) {
-  std::vector<Index> tet_start, tet_of, extra_start, extra_of;
+                              std::vector<std::array<Index, 16>>* tet_slots, std::span<const std::array<Index, 2>> couplings) {
+  std::vector<Index> tet_start, tet_of, extra_start, extra_of, coupling_start, coupling_of;
   incidence<4>(num_nodes, tets, &tet_start, &tet_of);
   incidence<8>(num_nodes, extra, &extra_start, &extra_of);
+  incidence<2>(num_nodes, couplings, &coupling_start, &coupling_of);
   tbb::enumerable_thread_specific<RowScratch> scratch([&] {
     RowScratch s;
     s.stamp.assign(static_cast<std::size_t>(num_nodes), -1);
@@ -62,6 +63,9 @@ void BlockSparseMatrix::build(Index num_nodes, std::span<const std::array<Index,
     }
     for (Index i = extra_start[r]; i < extra_start[r + 1]; ++i) {
       for (const Index n : extra[extra_of[i]]) add(n);
+    }
+    for (Index i = coupling_start[r]; i < coupling_start[r + 1]; ++i) {
+      for (const Index n : couplings[coupling_of[i]]) add(n);
     }
   };
   row_start_.assign(static_cast<std::size_t>(num_nodes) + 1, 0);

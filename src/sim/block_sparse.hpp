@@ -79,14 +79,15 @@ void append_chunks(Index count, Index chunk, std::vector<T>* into, const Body& b
 
 class BlockSparseMatrix {
  public:
-  /// The pattern in which every two nodes of a tet, and every two of the `extra` groups (eight
-  /// nodes, the two tets a spring joins), are coupled; the diagonal is always present. Fills
+  /// The pattern in which every two nodes of a tet, every two of the `extra` groups (eight
+  /// nodes, the two tets a spring joins) and the two of each of `couplings` (blocks wanted in
+  /// both orders: surface contact's), are coupled; the diagonal is always present. Fills
   /// `tet_slots` with the 16 slots of each tet: slot of (row node a, column node b) is
   /// tet_slots[t][4 a + b]. Stored compactly (no room left in rows: at 100k tets a matrix a
   /// third larger fell out of the cache and made each product three times slower). O(sum over
   /// nodes of the tets around it), parallel over rows.
   void build(Index num_nodes, std::span<const std::array<Index, 4>> tets, std::span<const std::array<Index, 8>> extra,
-             std::vector<std::array<Index, 16>>* tet_slots);
+             std::vector<std::array<Index, 16>>* tet_slots, std::span<const std::array<Index, 2>> couplings = {});
 
   /// Appends rows (new nodes) holding their diagonal block. No slot moves.
   void add_rows(Index count);
