@@ -114,8 +114,10 @@ struct SimulatorState {
   std::vector<ConstraintTerm> ledger_constraints;
   std::vector<std::pair<OrderedElement, Mat3>> reuse_take_out;
   std::vector<Index> reuse_put_in;
-  // Scratch of the constraint terms' scatter: per term its first block, per block its slot.
-  std::vector<Index> term_block_start, term_slots;
+  // Scratch of the constraint terms' scatter: per term its first block, per block its slot; the
+  // (term, row corner) entries bucketed by chunk of rows, in the terms' order.
+  std::vector<Index> term_block_start, term_slots, term_row_start, term_row_fill;
+  std::vector<std::array<Index, 2>> term_rows;
 
   // Scratch reused from step to step, so that a step allocates nothing once sizes settle (and
   // why a Simulator, even through const calls, is for one thread at a time).
