@@ -1,5 +1,5 @@
-// The Newton system's matrix and solver: the block pattern holds exactly the couplings of tets
-// and spring groups, the masked product is the dense product over free nodes, and conjugate
+// The Newton system's matrix and solver: the block pattern holds exactly the couplings of tets,
+// spring groups and contact's node pairs, the masked product is the dense product over free nodes, and conjugate
 // gradients solve to their target with the same bits on one thread and on several.
 
 #include <gtest/gtest.h>
@@ -30,9 +30,11 @@ TEST(BlockSparseMatrix, PatternHoldsExactlyTheCouplings) {
   const TetMesh mesh = make_bcc(Box{Vec3(0, 0, 0), Vec3(1, 1, 1)}, 0.25);
   const auto tets = tets_of(mesh);
   const std::vector<std::array<Index, 8>> extra{{0, 1, 2, 3, mesh.num_nodes() - 4, mesh.num_nodes() - 3, mesh.num_nodes() - 2, mesh.num_nodes() - 1}};
+  // Couplings (contact's blocks, kept through a build): both orders, one of them already a tet's.
+  const std::vector<std::array<Index, 2>> couplings{{5, mesh.num_nodes() - 7}, {mesh.num_nodes() / 2, 1}, {tets[0][0], tets[0][1]}};
   BlockSparseMatrix a;
   std::vector<std::array<Index, 16>> slots;
-  a.build(mesh.num_nodes(), tets, extra, &slots);
+  a.build(mesh.num_nodes(), tets, extra, &slots, couplings);
   std::set<std::pair<Index, Index>> expected;
   for (Index n = 0; n < mesh.num_nodes(); ++n) expected.insert({n, n});
   for (const auto& t : tets) {
@@ -43,7 +45,12 @@ TEST(BlockSparseMatrix, PatternHoldsExactlyTheCouplings) {
   for (const Index i : extra[0]) {
     for (const Index j : extra[0]) expected.insert({i, j});
   }
+  for (const auto& [i, j] : couplings) {
+    expected.insert({i, j});
+    expected.insert({j, i});
+  }
   ASSERT_EQ(a.num_blocks(), static_cast<Index>(expected.size()));
+  EXPECT_EQ(a.num_added_blocks(), 0);  // all of them in the rows, none in the added blocks' table
   for (const auto& [i, j] : expected) EXPECT_GE(a.slot(i, j), 0);
   for (Index row = 0; row < a.num_rows(); ++row) {
     Index previous = -1;
