@@ -317,7 +317,7 @@ class SurfaceContact {
   /// `move_end` (node positions), which moves the vertices by at most `sweep` relative to each
   /// other's centre.
   void cover(const Points& at, const Points* move_end, double sweep);
-  Points move_end_;  // max_step's scratch
+  Points move_end_, node_move_, vertex_move_;  // max_step's scratch: the move's end, the nodes' and vertices' motions
   std::vector<double> chunk_least_;  // max_step's scratch (min_chunks)
   /// How far the surface vertices move, beyond a motion common to all, when each node n moves
   /// by node_motion(n) (a Vec3): the largest distance of a vertex's motion from the centre of
