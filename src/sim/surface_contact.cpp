@@ -674,8 +674,9 @@ void SurfaceContact::cover(const Points& at, const Points* move_end, double swee
     const double moved = motion_since(at, reference_nodes_, allowed);
     const double moving = move_end ? motion_since(*move_end, reference_nodes_, allowed) : moved + sweep;
     if (2 * std::max(moved, moving) + dhat <= rho_) {
-      // The list holds: the vertices are placed only where there are candidates to measure.
-      if (candidates_.empty()) {
+      // The list holds: the vertices are placed only where there are candidates to measure or
+      // guards to read them (a guard's g is taken from the placed vertices).
+      if (candidates_.empty() && guards_.empty()) {
         forget_measures();
         return;
       }
@@ -992,7 +993,7 @@ double SurfaceContact::max_step(const Points& from, const double* direction) {
   cover(from, &move_end_, sweep);
   // Each vertex's motion over the move, once (a candidate's corners were embedded each time: 100k
   // corners against 43k vertices on the sliced hand).
-  place(node_move_, &vertex_move_);
+  if (!candidates_.empty()) place(node_move_, &vertex_move_);
   const double t_pairs = min_chunks(static_cast<Index>(candidates_.size()), kNodeChunk, 1.0, &chunk_least_, [&](Index begin, Index end) {
     double t_min = 1;
     for (Index k = begin; k < end; ++k) {
