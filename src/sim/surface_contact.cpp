@@ -987,13 +987,12 @@ double SurfaceContact::max_step(const Points& from, const double* direction) {
   if (!(whole_sweep > 0)) return 1;
   // The move considered: the direction, shortened to the trust region where it goes beyond it.
   const double share = std::min(1.0, kMaxSweep * settings_.thickness / whole_sweep), sweep = share * whole_sweep;
-  const auto whole_motion = [&](Index n) { return Vec3(motion.row(n).transpose()); };
   node_move_ = share * motion;
   move_end_ = from + node_move_;
   cover(from, &move_end_, sweep);
-  // Each vertex's motion over the move, once (a candidate's corners were embedded each time: 100k
-  // corners against 43k vertices on the sliced hand).
-  if (!candidates_.empty()) place(node_move_, &vertex_move_);
+  // Each vertex's motion over the move, once, for the pairs and the guards (a candidate's and a
+  // guard's corners were embedded each time: 100k corners against 43k vertices on the sliced hand).
+  if (!candidates_.empty() || !guards_.empty()) place(node_move_, &vertex_move_);
   const double t_pairs = min_chunks(static_cast<Index>(candidates_.size()), kNodeChunk, 1.0, &chunk_least_, [&](Index begin, Index end) {
     double t_min = 1;
     for (Index k = begin; k < end; ++k) {
@@ -1052,13 +1051,11 @@ double SurfaceContact::max_step(const Points& from, const double* direction) {
     for (Index k = begin; k < end; ++k) {
       const Guard& guard = guards_[static_cast<std::size_t>(k)];
       Vec3 motion_r = Vec3::Zero();
-      for (int i = 0; i < 4; ++i) {
-        if (guard.w[i] != 0) motion_r += guard.w[i] * embedded(guard.corner[i], whole_motion);
-      }
-      const double rate = guard.normal.dot(motion_r);
+      for (int i = 0; i < 4; ++i) motion_r += guard.w[i] * vertex_move_.row(guard.corner[i]).transpose();
+      const double rate = guard.normal.dot(motion_r);  // over the move: `share` of the step
       // g is linear along the step: stop where all but kKeepShare of what was left of the
       // allowance is used up. (y_: the vertices at `from`, see cover.)
-      if (rate < 0) t_min = std::min(t_min, std::max(0.0, (1 - kKeepShare) * (guard_gap(guard, y_) + guard.wall) / -rate));
+      if (rate < 0) t_min = std::min(t_min, std::max(0.0, (1 - kKeepShare) * (guard_gap(guard, y_) + guard.wall) * share / -rate));
     }
     return t_min;
   });
