@@ -108,6 +108,13 @@ void BlockSparseMatrix::build(Index num_nodes, std::span<const std::array<Index,
   added_values_.clear();
   single_added_values_.clear();
   resize_values();
+  // The pattern is structurally symmetric: every block's transpose is in it.
+  transposed_.resize(columns_.size());
+  for_chunks(num_nodes, kNodeChunk, [&](Index begin, Index end, Index) {
+    for (Index r = begin; r < end; ++r) {
+      for (Index k = row_start_[r]; k < row_start_[r + 1]; ++k) transposed_[static_cast<std::size_t>(k)] = slot(columns_[k], r);
+    }
+  });
 }
 
 void BlockSparseMatrix::resize_values() {
@@ -147,6 +154,9 @@ Index BlockSparseMatrix::find_or_add(Index row, Index column) {
   resize_values();
   added_[row].push_back(k);
   index_added(key(row, column), k);
+  const Index transposed = row == column ? k : slot(column, row);
+  transposed_.push_back(transposed);
+  if (transposed >= 0) transposed_[static_cast<std::size_t>(transposed)] = k;
   return k;
 }
 

@@ -105,6 +105,10 @@ class BlockSparseMatrix {
   /// row, which contact makes long, took a quarter of a piled step). O(log row length).
   Index slot(Index row, Index column) const;
   Index diagonal_slot(Index row) const { return diagonal_[row]; }
+  /// The slot of the transposed block: (column, row) for the block (row, column) in `slot`, or
+  /// -1 while that one is not in the pattern. O(1) (kept through builds and added blocks), so
+  /// that a symmetric scatter looks up half its blocks.
+  Index transposed_slot(Index slot) const { return transposed_[static_cast<std::size_t>(slot)]; }
   /// Calls visit(slot, column) for each block of `row`: those of the build by ascending column,
   /// then those added since.
   template <typename Visit>
@@ -208,6 +212,7 @@ class BlockSparseMatrix {
   std::vector<std::uint64_t> added_keys_;
   std::vector<Index> added_key_slots_;
   std::vector<Index> diagonal_;
+  std::vector<Index> transposed_;  // per slot, the slot of the transposed block (or -1)
 };
 
 struct ConjugateGradientOptions {

@@ -103,8 +103,15 @@ struct Potential {
           std::copy_n(slot - t.count * t.count, t.count * t.count, slot);
           continue;
         }
+        // The diagonal's blocks are known, and a block's transpose is found from it: half the
+        // other blocks are looked up.
         for (int a = 0; a < t.count; ++a) {
-          for (int b = 0; b < t.count; ++b) *slot++ = s.hessian.slot(t.nodes[a], t.nodes[b]);
+          slot[a * t.count + a] = s.hessian.diagonal_slot(t.nodes[a]);
+          for (int b = a + 1; b < t.count; ++b) {
+            const Index found = s.hessian.slot(t.nodes[a], t.nodes[b]);
+            slot[a * t.count + b] = found;
+            slot[b * t.count + a] = found >= 0 ? s.hessian.transposed_slot(found) : s.hessian.slot(t.nodes[b], t.nodes[a]);
+          }
         }
       }
     });

@@ -51,7 +51,10 @@ TEST(BlockSparseMatrix, PatternHoldsExactlyTheCouplings) {
   }
   ASSERT_EQ(a.num_blocks(), static_cast<Index>(expected.size()));
   EXPECT_EQ(a.num_added_blocks(), 0);  // all of them in the rows, none in the added blocks' table
-  for (const auto& [i, j] : expected) EXPECT_GE(a.slot(i, j), 0);
+  for (const auto& [i, j] : expected) {
+    EXPECT_GE(a.slot(i, j), 0);
+    EXPECT_EQ(a.transposed_slot(a.slot(i, j)), a.slot(j, i));
+  }
   for (Index row = 0; row < a.num_rows(); ++row) {
     Index previous = -1;
     a.for_each_block(row, [&](Index k, Index column) {
@@ -68,6 +71,17 @@ TEST(BlockSparseMatrix, PatternHoldsExactlyTheCouplings) {
     }
   }
   EXPECT_EQ(a.slot(0, mesh.num_nodes() - 1) >= 0, true);
+  // A block added after the build has no transpose until that is added too; then each names the other.
+  const Index p = 2, q = mesh.num_nodes() - 9;
+  ASSERT_LT(a.slot(p, q), 0);
+  const Index pq = a.find_or_add(p, q);
+  EXPECT_EQ(a.transposed_slot(pq), -1);
+  const Index qp = a.find_or_add(q, p);
+  EXPECT_EQ(a.transposed_slot(pq), qp);
+  EXPECT_EQ(a.transposed_slot(qp), pq);
+  a.add_rows(1);
+  const Index last = a.num_rows() - 1;
+  EXPECT_EQ(a.transposed_slot(a.diagonal_slot(last)), a.diagonal_slot(last));
 }
 
 // A random symmetric positive definite matrix on a mesh's pattern: per tet a random Gram matrix,
