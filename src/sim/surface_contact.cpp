@@ -1200,26 +1200,21 @@ void SurfaceContact::update_joins(const Points& at) {
   if (!enabled() || joins_.empty()) return;
   cover(at, nullptr, 0);
   // Every pair of joined copies is measured: the next step's guards, which start here, look at
-  // them all. A join touches by a vertex-triangle pair (most joins), else by an edge pair.
+  // them all. A join touches while any of its pairs (vertex-triangle or edges) is within dhat.
   measure(kJoined);
-  // Both passes in parallel, each chunk listing the joins it found touching.
-  std::vector<std::uint8_t> touching(joins_.size(), 0);
+  // In parallel, each chunk listing the joins it found touching.
   const auto join_of = [&](const Candidate& c) {
     return static_cast<std::size_t>(std::lower_bound(joins_.begin(), joins_.end(), c.copies) - joins_.begin());
   };
-  const auto K = static_cast<Index>(candidates_.size());
-  for (const bool edges : {false, true}) {
-    std::vector<std::size_t> found;
-    append_chunks(K, kNodeChunk, &found, [&](Index begin, Index end, std::vector<std::size_t>* out) {
-      for (Index k = begin; k < end; ++k) {
-        const Candidate& c = candidates_[static_cast<std::size_t>(k)];
-        if (!c.joined || c.neighbouring || (c.edges != 0) != edges) continue;
-        const std::size_t join = join_of(c);
-        if (!touching[join] && proximities_[k].distance < settings_.thickness) out->push_back(join);
-      }
-    });
-    for (const std::size_t join : found) touching[join] = 1;
-  }
+  std::vector<std::size_t> found;
+  append_chunks(static_cast<Index>(candidates_.size()), kNodeChunk, &found, [&](Index begin, Index end, std::vector<std::size_t>* out) {
+    for (Index k = begin; k < end; ++k) {
+      const Candidate& c = candidates_[static_cast<std::size_t>(k)];
+      if (c.joined && !c.neighbouring && proximities_[k].distance < settings_.thickness) out->push_back(join_of(c));
+    }
+  });
+  std::vector<std::uint8_t> touching(joins_.size(), 0);
+  for (const std::size_t join : found) touching[join] = 1;
   std::size_t kept = 0;
   for (std::size_t j = 0; j < joins_.size(); ++j) {
     if (touching[j]) joins_[kept++] = joins_[j];
