@@ -245,6 +245,8 @@ struct SceneStageSeconds {
 struct SceneSummary {
   int frames = 0, steps = 0, cuts_applied = 0;
   Index tets = 0, nodes = 0, pieces = 0;
+  /// A tet scene: the pieces' material volumes in rest space, largest first (CutMesh::piece_volumes).
+  std::vector<double> piece_volumes;
   /// A cloth scene: its input triangles and triangle copies at the end (tets stays 0), the pieces'
   /// areas (largest first), and the copies world-space cuts left uncut as coplanar with a blade.
   bool cloth = false;

@@ -527,6 +527,7 @@ class SceneRunner {
     summary_.tets = r.mesh.mesh.num_tets();
     summary_.nodes = r.mesh.mesh.num_nodes();
     summary_.pieces = r.mesh.num_pieces();
+    summary_.piece_volumes = r.mesh.piece_volumes;
     summary_.mean_newton_iterations = summary_.steps > 0 ? newton_total / summary_.steps : 0;
     summary_.mean_cg_iterations = summary_.steps > 0 ? cg_total / summary_.steps : 0;
     frames_.finish(step_ms, session_.simulator().positions(), start_time, &summary_);
@@ -594,6 +595,7 @@ class SceneRunner {
                     {"tets", s.tets},
                     {"nodes", s.nodes},
                     {"pieces", s.pieces},
+                    {"piece_volumes", s.piece_volumes},
                     {"wall_seconds", s.wall_seconds},
                     {"seconds_per_frame", s.seconds_per_frame},
                     {"mean_newton_iterations", s.mean_newton_iterations},

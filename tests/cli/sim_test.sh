@@ -24,6 +24,10 @@ for f in 0 1 2 3 4; do
 done
 grep -q 'file="surface_0004.vtp"' out/surface.pvd || fail "the surface series lacks its last frame"
 json_check out/summary.json 'j["frames"] == 5 and j["steps"] == 20 and j["pieces"] == 2 and j["unconverged_steps"] == 0'
+# The pieces' volumes in the material add up to the block's; the cut (in world space, once the
+# block has fallen about 3 mm) splits it as the plane x = 0.5 - 0.1 (z - 0.5) nearly does, 0.51
+# and 0.49 across z in [0.1, 1.1].
+json_check out/summary.json 'len(j["piece_volumes"]) == 2 and abs(sum(j["piece_volumes"]) - 1) < 1e-12 and abs(j["piece_volumes"][1] - 0.49) < 1e-3'
 # Stage times per step, the residual left, the final box.
 json_check out/summary.json 'all(j["ms_per_step"][k] >= 0 for k in ("cut", "surface", "remesh", "step", "total", "median", "p99", "max"))'
 json_check out/summary.json 'j["ms_per_step"]["step"] > 0 and j["ms_per_step"]["total"] >= j["ms_per_step"]["step"] and j["ms_per_step"]["max"] >= j["ms_per_step"]["median"]'

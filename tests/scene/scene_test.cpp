@@ -114,6 +114,10 @@ TEST(Scene, CutInFlightThenBothPiecesLandOnTheGround) {
   EXPECT_EQ(summary.frames, 7);  // t = 0, 0.1, ..., 0.6
   EXPECT_EQ(summary.cuts_applied, 1);
   EXPECT_EQ(summary.pieces, 2);
+  // The cube fell straight down before the cut: in the material the plane lies at x = 0.52 still.
+  ASSERT_EQ(summary.piece_volumes.size(), 2u);
+  EXPECT_NEAR(summary.piece_volumes[0], 0.52, 1e-9);
+  EXPECT_NEAR(summary.piece_volumes[1], 0.48, 1e-9);
   EXPECT_EQ(summary.unconverged_steps, 0);
   // The series lists every frame, and the last frame's mesh lies on the ground (penetration at
   // most the penalty's compliance) with the cut's copies.
