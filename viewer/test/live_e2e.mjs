@@ -3,7 +3,8 @@
 // 127.0.0.1 refused, and work it with real mouse events: pull the top with the hook and see the
 // surface move, drag the scalpel across the shaft until it is in two pieces (checked from
 // /api/state and from the page's pixels: two piece colours), download the recording and replay
-// it with `tetcut sim` to the same piece count, and stop the server with Ctrl-C, which writes
+// it with `tetcut sim` to the same pieces (two that hold the material, and at most fragments
+// besides: see the scalpel below), and stop the server with Ctrl-C, which writes
 // its own recording. Prints frames received per second and how soon cuts were seen.
 //
 //   node viewer/test/live_e2e.mjs --tetcut build/release/bin/tetcut --work DIR
@@ -173,10 +174,22 @@ for (let stroke = 0; stroke < 4 && pieces < 2; ++stroke) {
 const cutSeconds = (Date.now() - cutStart) / 1000;
 const cutFps = ((await live(() => window.tetcutLive.framesReceived)) - cutFramesBefore) / cutSeconds;
 const cuttingState = await state();
-check(pieces === 2, `the scalpel cut the femur in two (/api/state: ${pieces} pieces)`);
+// The femur swings and sags as it is cut, at times faster than the blade crosses it, so that the
+// blade's path through the material can fold back on itself and cut off a fragment as well (seen
+// in about one run in ten: 5 tet copies holding 1e-7 of the volume, replayed exactly by
+// `tetcut sim`). So the live count may exceed two; the replay's volumes below tell a fragment
+// from a third part.
+check(pieces >= 2, `the scalpel cut the femur apart (/api/state: ${pieces} pieces)`);
+if (pieces > 2) console.log(`     ${pieces - 2} more piece(s): checked as fragments from the replay's volumes`);
+if (pieces < 2) {
+  // Kept for diagnosis: the session so far, replayable by `tetcut sim`.
+  const kept = path.join(work, 'failed-stroke-recording.json');
+  writeFileSync(kept, await (await fetch(`${base.origin}/api/recording?token=${token}`)).text());
+  console.log(`     the session so far: ${kept}`);
+}
 await sleep(1000);  // the freed top swings on its pin
 await page.click('#pause');
-await page.waitForFunction(() => window.tetcutLive.stats?.paused === true && window.tetcutLive.pieces === 2, null, { timeout: 10_000 });
+await page.waitForFunction((n) => window.tetcutLive.stats?.paused === true && window.tetcutLive.pieces === n, pieces, { timeout: 10_000 });
 const pausedAt = (await state()).steps;
 await sleep(600);
 check((await state()).steps === pausedAt, 'pause holds the simulation');
@@ -240,13 +253,21 @@ check(['blade', 'grab', 'pin'].every((kind) => recording.events.some((e) => kind
 execFileSync(tetcut, ['sim', recordingPath, '-o', path.join(work, 'replay')], { stdio: 'inherit' });
 const replay = JSON.parse(readFileSync(path.join(work, 'replay', 'summary.json'), 'utf8'));
 check(replay.pieces === pieces, `tetcut sim replays the recording to ${replay.pieces} pieces`);
+{
+  const volumes = replay.piece_volumes ?? [];
+  const total = volumes.reduce((a, b) => a + b, 0);
+  const rest = volumes.slice(2).reduce((a, b) => a + b, 0);
+  check(volumes.length === replay.pieces && volumes[1] > 0.05 * total,
+        `two parts hold the material (volumes ${volumes.slice(0, 2).map((v) => v.toExponential(3)).join(', ')})`);
+  check(rest <= 1e-3 * total, `any other pieces are fragments (${volumes.length - 2} holding ${(rest / total).toExponential(1)} of the volume)`);
+}
 
 // --- reset, and a second page watching the same session ---------------------------------------
 const second = await context.newPage();
 second.on('pageerror', (error) => pageErrors.push(error.message));
 await second.goto(url);
-await second.waitForFunction(() => window.tetcutLive?.framesReceived > 0 && window.tetcutLive.pieces === 2, null, { timeout: 30_000 });
-check(true, 'a second page joins and sees the two pieces');
+await second.waitForFunction((n) => window.tetcutLive?.framesReceived > 0 && window.tetcutLive.pieces === n, pieces, { timeout: 30_000 });
+check(true, 'a second page joins and sees the same pieces');
 await page.click('#reset');
 await page.waitForFunction(() => window.tetcutLive.pieces === 1, null, { timeout: 60_000 });
 await second.waitForFunction(() => window.tetcutLive.pieces === 1, null, { timeout: 30_000 });
