@@ -36,6 +36,8 @@ let serverOutput = '';
 server.stdout.on('data', (d) => { serverOutput += d; });
 server.stderr.on('data', (d) => { serverOutput += d; });
 const serverExit = new Promise((resolve) => server.on('exit', (code, signal) => resolve({ code, signal })));
+// A check that throws (a timeout) must not leave the server simulating on its own.
+process.on('exit', () => { if (server.exitCode === null && server.signalCode === null) server.kill('SIGKILL'); });
 let url = null;
 for (let waited = 0; !url && waited < 120_000; waited += 100) {
   url = serverOutput.match(/http:\/\/127\.0\.0\.1:\d+\/\?token=[0-9a-f]+/)?.[0] ?? null;
