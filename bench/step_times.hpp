@@ -20,5 +20,10 @@ inline double percentile(std::vector<double> v, double p) {
   return v[i];
 }
 inline double median(const std::vector<double>& v) { return percentile(v, 0.5); }
+inline double mean(const std::vector<double>& v) {
+  double sum = 0;
+  for (const double x : v) sum += x;
+  return v.empty() ? 0 : sum / static_cast<double>(v.size());
+}
 
 }  // namespace tetcut::bench

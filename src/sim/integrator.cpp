@@ -152,20 +152,83 @@ struct Potential {
     });
   }
 
-  // Contact and springs: their energies and gradients on one thread; into the matrix (and
-  // recorded, for a later step that reuses it) through add_recorded_terms.
+  // Contact and springs: their energies and gradients; into the matrix (and recorded, for a later
+  // step that reuses it) through add_recorded_terms. The surface contact's terms in parallel
+  // (surface_terms), the few others on one thread.
   double constraints(const Points& at, std::vector<double>* g, bool hessian) const {
     double energy = 0;
     if (hessian) s.ledger_constraints.clear();
-    s.for_each_constraint(at, [&](const std::array<Index, 16>& nodes, const std::array<double, 16>& c, int count, double e,
-                                  const Vec3& dE, const Mat3& d2E) {
-      energy += e;
-      for (int a = 0; a < count; ++a) {
-        for (int i = 0; i < 3; ++i) (*g)[3 * nodes[a] + i] += c[a] * dE[i];
-      }
-      if (hessian) s.ledger_constraints.push_back({nodes, c, count, d2E});
-    });
+    s.for_each_constraint(
+        at,
+        [&](const std::array<Index, 16>& nodes, const std::array<double, 16>& c, int count, double e, const Vec3& dE, const Mat3& d2E) {
+          energy += e;
+          for (int a = 0; a < count; ++a) {
+            for (int i = 0; i < 3; ++i) (*g)[3 * nodes[a] + i] += c[a] * dE[i];
+          }
+          if (hessian) s.ledger_constraints.emplace_back(nodes, c, count, d2E);
+        },
+        false);
+    energy += surface_terms(at, g, hessian);
     if (hessian) add_recorded_terms(1);
+    return energy;
+  }
+
+  // The surface contact's active terms (7.4k at most on the sliced hand, where taking them on one
+  // thread, each term's gradient and its copy into the ledger, took 1.1 to 1.35 ms an evaluation,
+  // 0.14 ms now): their energy, their gradient added into g, and, with `hessian`, their copies appended
+  // to the ledger. In parallel over groups of the terms' fixed chunks, each group summing into its
+  // own gradient (the first into g), the groups then added in order: the number of groups follows
+  // the terms and nodes, not the threads, so neither do the sums. O(terms x nodes each + groups x
+  // nodes).
+  double surface_terms(const Points& at, std::vector<double>* g, bool hessian) const {
+    if (!s.surface_contact.enabled()) return 0;
+    const std::vector<std::vector<detail::ActiveTerm>>& chunks = s.surface_contact.active_chunks(at);
+    const auto chunk_count = static_cast<Index>(chunks.size());
+    std::size_t total = 0;
+    for (const std::vector<detail::ActiveTerm>& chunk : chunks) total += chunk.size();
+    if (total == 0) return 0;
+    // A group is worth its own gradient once its terms touch about as many entries as it has.
+    constexpr std::size_t kMaxGroups = 4, kEntriesPerTerm = 3 * 16;
+    const std::size_t size = g->size();
+    const auto groups = static_cast<Index>(std::clamp<std::size_t>(total * kEntriesPerTerm / std::max<std::size_t>(size, 1), 1, kMaxGroups));
+    const std::size_t ledger_start = s.ledger_constraints.size();
+    if (hessian) s.ledger_constraints.resize(ledger_start + total);
+    s.term_group_gradient.resize(static_cast<std::size_t>(groups));
+    double group_energy[kMaxGroups] = {};
+    detail::for_chunks(groups, 1, [&](Index group, Index, Index) {
+      std::vector<double>* into = g;
+      if (group > 0) {
+        into = &s.term_group_gradient[static_cast<std::size_t>(group)];
+        into->assign(size, 0.0);
+      }
+      const Index first = chunk_count * group / groups, last = chunk_count * (group + 1) / groups;
+      std::size_t at_ledger = ledger_start;
+      for (Index c = 0; c < first; ++c) at_ledger += chunks[static_cast<std::size_t>(c)].size();
+      double energy = 0;
+      for (Index c = first; c < last; ++c) {
+        for (const detail::ActiveTerm& a : chunks[static_cast<std::size_t>(c)]) {
+          const detail::ContactTerm& t = a.term;
+          energy += a.energy;
+          for (int k = 0; k < t.count; ++k) {
+            for (int i = 0; i < 3; ++i) (*into)[3 * t.nodes[k] + i] += t.coefficients[k] * a.gradient[i];
+          }
+          if (hessian) {
+            SimulatorState::ConstraintTerm& recorded = s.ledger_constraints[at_ledger++];
+            recorded.nodes = t.nodes;
+            recorded.coefficients = t.coefficients;
+            recorded.count = t.count;
+            recorded.d2E = a.hessian;
+          }
+        }
+      }
+      group_energy[group] = energy;
+    });
+    double energy = group_energy[0];
+    for (Index group = 1; group < groups; ++group) {
+      const std::vector<double>& from = s.term_group_gradient[static_cast<std::size_t>(group)];
+      for (std::size_t k = 0; k < size; ++k) (*g)[k] += from[k];
+      energy += group_energy[group];
+    }
     return energy;
   }
 
@@ -181,7 +244,7 @@ struct Potential {
     add_recorded_terms(-1);
     s.ledger_constraints.clear();
     s.for_each_constraint(at, [&](const std::array<Index, 16>& nodes, const std::array<double, 16>& c, int count, double, const Vec3&,
-                                  const Mat3& d2E) { s.ledger_constraints.push_back({nodes, c, count, d2E}); });
+                                  const Mat3& d2E) { s.ledger_constraints.emplace_back(nodes, c, count, d2E); });
     add_recorded_terms(1);
   }
 

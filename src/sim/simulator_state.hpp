@@ -102,6 +102,9 @@ struct SimulatorState {
   // own in. A cut since then leaves element contributions to take out (the old element, its
   // slots and warm start) and to put in (positions), both at assembled_at.
   struct ConstraintTerm {
+    ConstraintTerm() {}  // written in place (a resize() for a parallel fill zeroes nothing)
+    ConstraintTerm(const std::array<Index, 16>& n, const std::array<double, 16>& c, int k, const Mat3& h)
+        : nodes(n), coefficients(c), count(k), d2E(h) {}
     std::array<Index, 16> nodes;
     std::array<double, 16> coefficients;
     int count;
@@ -118,6 +121,9 @@ struct SimulatorState {
   // (term, row corner) entries bucketed by chunk of rows, in the terms' order.
   std::vector<Index> term_block_start, term_slots, term_row_start, term_row_fill;
   std::vector<std::array<Index, 2>> term_rows;
+  // Scratch of the surface contact terms' gradient: per group of terms after the first, its own
+  // gradient (3 per node), added in the groups' order.
+  std::vector<std::vector<double>> term_group_gradient;
 
   // Scratch reused from step to step, so that a step allocates nothing once sizes settle (and
   // why a Simulator, even through const calls, is for one thread at a time).
@@ -193,13 +199,15 @@ struct SimulatorState {
 
   /// The soft constraints as energies of one point y = sum_i c_i x_{n_i} (up to 16 nodes: a
   /// surface contact pair's y is the vector between its closest points); calls
-  /// visit(nodes, coefficients, count, energy, dE/dy, d2E/dy2) for each active one at `at`.
+  /// visit(nodes, coefficients, count, energy, dE/dy, d2E/dy2) for each active one at `at`; the
+  /// surface contact's pairs and guards last, unless `surface_pairs` is false (the integrator
+  /// takes those in parallel: SurfaceContact::active_chunks).
   template <typename Visit>
-  void for_each_constraint(const Points& at, Visit&& visit) const;
+  void for_each_constraint(const Points& at, Visit&& visit, bool surface_pairs = true) const;
 };
 
 template <typename Visit>
-void SimulatorState::for_each_constraint(const Points& at, Visit&& visit) const {
+void SimulatorState::for_each_constraint(const Points& at, Visit&& visit, bool surface_pairs) const {
   std::array<Index, 16> nodes{};
   std::array<double, 16> coefficients{};
   for (const EmbeddedPoint& point : contact_points) {
@@ -255,9 +263,11 @@ void SimulatorState::for_each_constraint(const Points& at, Visit&& visit) const 
     visit(nodes, coefficients, 8, 0.5 * spring.stiffness * y.squaredNorm(), Vec3(spring.stiffness * y),
           Mat3(spring.stiffness * Mat3::Identity()));
   }
-  surface_contact.for_each_active(at, [&](const detail::ContactTerm& t, double energy, const Vec3& dE, const Mat3& d2E) {
-    visit(t.nodes, t.coefficients, t.count, energy, dE, d2E);
-  });
+  if (surface_pairs) {
+    surface_contact.for_each_active(at, [&](const detail::ContactTerm& t, double energy, const Vec3& dE, const Mat3& d2E) {
+      visit(t.nodes, t.coefficients, t.count, energy, dE, d2E);
+    });
+  }
   surface_contact.for_each_friction(at, [&](const detail::ContactTerm& t, double energy, const Vec3& dE, const Mat3& d2E) {
     visit(t.nodes, t.coefficients, t.count, energy, dE, d2E);
   });

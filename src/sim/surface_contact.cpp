@@ -171,8 +171,8 @@ void SurfaceContact::lag_friction(const Points& start) {
   if (!enabled() || !(settings_.friction > 0)) return;
   for_each_active(start, [&](const ContactTerm& t, double, const Vec3& dE, const Mat3&) {
     const double force = dE.norm();
-    if (!(force > 0) || !(t.proximity.distance > 0)) return;
-    friction_.push_back({t, t.proximity.r / t.proximity.distance, t.proximity.r, force});
+    if (!(force > 0) || !(t.distance > 0)) return;
+    friction_.push_back({t, t.r / t.distance, t.r, force});
   });
 }
 
@@ -514,28 +514,24 @@ bool SurfaceContact::across_one_cut(const Candidate& c) const {
 
 collision::Proximity SurfaceContact::proximity(const Candidate& c, const Points& y) const { return proximity_at(corner_positions(c, y), c.edges); }
 
-ContactTerm SurfaceContact::term(const Candidate& c, const collision::Proximity& p) const { return term(corners(c), p); }
-
-ContactTerm SurfaceContact::term(const std::array<Index, 4>& k, const collision::Proximity& p) const {
-  ContactTerm t;
-  t.proximity = p;
+void SurfaceContact::make_term(const std::array<Index, 4>& k, const std::array<double, 4>& w, ContactTerm* t) const {
+  t->count = 0;
   for (int corner = 0; corner < 4; ++corner) {
-    if (p.w[corner] == 0) continue;
+    if (w[corner] == 0) continue;
     const auto v = static_cast<std::size_t>(k[corner]);
     for (int i = 0; i < 4; ++i) {
-      const double coefficient = p.w[corner] * vertex_weights_[v][i];
+      const double coefficient = w[corner] * vertex_weights_[v][i];
       if (coefficient == 0) continue;
       const Index node = vertex_nodes_[v][i];
       int slot = 0;
-      while (slot < t.count && t.nodes[slot] != node) ++slot;
-      if (slot == t.count) {
-        t.nodes[t.count] = node;
-        t.coefficients[t.count++] = 0;
+      while (slot < t->count && t->nodes[slot] != node) ++slot;
+      if (slot == t->count) {
+        t->nodes[t->count] = node;
+        t->coefficients[t->count++] = 0;
       }
-      t.coefficients[slot] += coefficient;
+      t->coefficients[slot] += coefficient;
     }
   }
-  return t;
 }
 
 double SurfaceContact::guard_gap(const Guard& guard, const Points& y) {
@@ -544,12 +540,10 @@ double SurfaceContact::guard_gap(const Guard& guard, const Points& y) {
   return guard.normal.dot(r) - guard.zero;
 }
 
-ContactTerm SurfaceContact::guard_term(const Guard& guard) const {
-  collision::Proximity foot;
-  foot.w = guard.w;
-  foot.r = guard.start_r;
-  foot.distance = guard.start_distance;
-  return term(guard.corner, foot);
+void SurfaceContact::guard_term(const Guard& guard, ContactTerm* t) const {
+  make_term(guard.corner, guard.w, t);
+  t->r = guard.start_r;
+  t->distance = guard.start_distance;
 }
 
 void SurfaceContact::collect_active(const Points& at) {
@@ -568,14 +562,20 @@ void SurfaceContact::collect_active(const Points& at) {
       for (Index k = chunk * kNodeChunk; k < std::min(K, (chunk + 1) * kNodeChunk); ++k) {
         const collision::Proximity& p = proximities_[k];
         if (candidates_[k].joined || candidates_[k].sutured || !(p.distance < dhat)) continue;
-        const ContactTerm t = term(candidates_[k], p);
+        ActiveTerm& a = out.emplace_back();
+        make_term(corners(candidates_[k]), p.w, &a.term);
+        a.term.r = p.r;
+        a.term.distance = p.distance;
         if (!(p.distance > 0)) {
-          out.push_back({t, kInfinity, Vec3::Zero(), Mat3::Zero()});
+          a.energy = kInfinity;
+          a.gradient.setZero();
+          a.hessian.setZero();
           continue;
         }
         const Vec3 n = p.r / p.distance;
-        out.push_back({t, kappa * barrier(p.distance, dhat), kappa * barrier_first(p.distance, dhat) * n,
-                       kappa * barrier_second(p.distance, dhat) * n * n.transpose()});
+        a.energy = kappa * barrier(p.distance, dhat);
+        a.gradient = kappa * barrier_first(p.distance, dhat) * n;
+        a.hessian = kappa * barrier_second(p.distance, dhat) * n * n.transpose();
       }
       return;
     }
@@ -586,12 +586,17 @@ void SurfaceContact::collect_active(const Points& at) {
       const double wall = guard.wall;
       const double g = guard_gap(guard, y_);  // y_: the vertices at `at` (cover)
       if (g >= 0) continue;
+      ActiveTerm& a = out.emplace_back();
+      guard_term(guard, &a.term);
       if (!(g + wall > 0)) {
-        out.push_back({guard_term(guard), kInfinity, Vec3::Zero(), Mat3::Zero()});
+        a.energy = kInfinity;
+        a.gradient.setZero();
+        a.hessian.setZero();
         continue;
       }
-      out.push_back({guard_term(guard), kappa * barrier(g + wall, wall), kappa * barrier_first(g + wall, wall) * guard.normal,
-                     kappa * barrier_second(g + wall, wall) * guard.normal * guard.normal.transpose()});
+      a.energy = kappa * barrier(g + wall, wall);
+      a.gradient = kappa * barrier_first(g + wall, wall) * guard.normal;
+      a.hessian = kappa * barrier_second(g + wall, wall) * guard.normal * guard.normal.transpose();
     }
   });
   active_at_ = at;

@@ -174,12 +174,25 @@ double pair_energy(const std::array<Vec3, 4>& y, bool edges, double dhat, double
 double friction_energy(const Vec3& u, const Vec3& n, double normal_force, double mu, double eps, Vec3* gradient = nullptr,
                        Mat3* hessian = nullptr);
 
-/// One pair as a soft constraint: r = sum_i coefficients[i] x_{nodes[i]} (count distinct nodes).
+/// One pair as a soft constraint: r = sum_i coefficients[i] x_{nodes[i]} (count distinct nodes),
+/// with r and |r| where it was made (lagged friction's normal and start). Kept to what its readers
+/// need (it held the whole Proximity, 104 bytes more): every evaluation writes thousands of them
+/// on the sliced hand, and reads them again.
 struct ContactTerm {
   std::array<Index, 16> nodes;
   std::array<double, 16> coefficients;
   int count = 0;
-  collision::Proximity proximity;
+  Vec3 r = Vec3::Zero();
+  double distance = 0;
+};
+
+/// A term of for_each_active with its energy and derivatives in r.
+struct ActiveTerm {
+  ActiveTerm() {}  // filled in place by SurfaceContact::collect_active: emplace_back() zeroes nothing
+  ContactTerm term;
+  double energy;
+  Vec3 gradient;
+  Mat3 hessian;
 };
 
 class SurfaceContact {
@@ -209,6 +222,12 @@ class SurfaceContact {
   /// `at`, in a fixed order. Energy +inf (and zero derivatives) for a pair at distance 0.
   template <typename Visit>
   void for_each_active(const Points& at, Visit&& visit);
+  /// The same terms, in fixed chunks whose concatenation is that order: for callers that take
+  /// them in parallel. Valid until the next call that moves or changes the pairs.
+  const std::vector<std::vector<ActiveTerm>>& active_chunks(const Points& at) {
+    collect_active(at);
+    return active_;
+  }
 
   /// The largest t in (0, 1] such that moving the nodes from `from` along t * direction (3 per
   /// node) keeps every counted pair at a positive distance, with a margin: conservative
@@ -296,13 +315,6 @@ class SurfaceContact {
     return sum;
   }
   void place(const Points& at, Points* y) const;
-  /// A term of for_each_active with its energy and derivatives in r.
-  struct ActiveTerm {
-    ContactTerm term;
-    double energy;
-    Vec3 gradient;
-    Mat3 hessian;
-  };
   /// The active terms at `at` into active_: the counted pairs closer than dhat, in the
   /// candidates' order, then the guards' barriers where g < 0, in theirs. Made in parallel over
   /// fixed chunks (the terms and the barrier's logarithms, for about 4.5k pairs and 15k guards on
@@ -377,9 +389,8 @@ class SurfaceContact {
   /// The pair's four corners at vertex positions y (the vertex or first edge first).
   std::array<Vec3, 4> corner_positions(const Candidate& c, const Points& y) const;
   std::array<Index, 4> corners(const Candidate& c) const;
-  ContactTerm term(const Candidate& c, const collision::Proximity& p) const;
-  /// The term of r = sum_i w_i corner_i (the weights p.w) in the nodes.
-  ContactTerm term(const std::array<Index, 4>& corner, const collision::Proximity& p) const;
+  /// The term of r = sum_i w_i corner_i in the nodes, into *t (its r and distance left as they are).
+  void make_term(const std::array<Index, 4>& corner, const std::array<double, 4>& w, ContactTerm* t) const;
   bool neighbours(Index copy_a, Index copy_b) const;
   /// Whether two copies have corners at one rest point: copies of one tet, or of neighbours,
   /// before the cuts that separated them.
@@ -429,7 +440,7 @@ class SurfaceContact {
   };
   /// A guard's g at vertex positions y, less its zero.
   static double guard_gap(const Guard& guard, const Points& y);
-  ContactTerm guard_term(const Guard& guard) const;
+  void guard_term(const Guard& guard, ContactTerm* t) const;
   /// A guard's zero: its g in the material where the pair lay behind the plane there (the rims of
   /// cuts that meet at a junction, whose faces were triangulated apart), so that no guard pushes
   /// at rest; less kGuardSlack of the allowance, so that sides that coincide up to rounding load
