@@ -448,6 +448,7 @@ class SurfaceContact {
   double guard_zero(const std::array<Index, 4>& corner, const std::array<double, 4>& w, Index triangle) const;
   static constexpr double kGuardSlack = 1e-6;
   std::vector<Guard> guards_;
+  std::vector<Index> first_vertex_guard_;  // lag_guards' scratch: per vertex its first guard, or -1
   bool sutures_changed_ = false;
   Points rest_y_;
   // Per triangle its unit normal in the material; per vertex its triangles (CSR).
