@@ -516,19 +516,34 @@ collision::Proximity SurfaceContact::proximity(const Candidate& c, const Points&
 
 void SurfaceContact::make_term(const std::array<Index, 4>& k, const std::array<double, 4>& w, ContactTerm* t) const {
   t->count = 0;
+  // Per corner, the slot each of its copy's four nodes went to (-1: none, its coefficient was 0).
+  // Corners embedded in one copy share its nodes in one order (vertex_nodes_ is the copy's), so a
+  // corner whose copy an earlier corner had takes that corner's slots without searching: most
+  // pairs span two copies, 8 nodes, not 16 searched among each other. Nodes are met in the same
+  // order, and each coefficient summed in the same order, as by searching.
+  std::array<std::array<int, 4>, 4> slot_of;
   for (int corner = 0; corner < 4; ++corner) {
+    slot_of[corner].fill(-1);
     if (w[corner] == 0) continue;
-    const auto v = static_cast<std::size_t>(k[corner]);
+    const Index v = k[corner];
+    int same = -1;
+    for (int earlier = 0; earlier < corner && same < 0; ++earlier) {
+      if (w[earlier] != 0 && vertex_copy_[k[earlier]] == vertex_copy_[v]) same = earlier;
+    }
     for (int i = 0; i < 4; ++i) {
       const double coefficient = w[corner] * vertex_weights_[v][i];
       if (coefficient == 0) continue;
-      const Index node = vertex_nodes_[v][i];
-      int slot = 0;
-      while (slot < t->count && t->nodes[slot] != node) ++slot;
-      if (slot == t->count) {
-        t->nodes[t->count] = node;
-        t->coefficients[t->count++] = 0;
+      int slot = same >= 0 ? slot_of[same][i] : -1;
+      if (slot < 0) {
+        const Index node = vertex_nodes_[v][i];
+        slot = 0;
+        while (slot < t->count && t->nodes[slot] != node) ++slot;
+        if (slot == t->count) {
+          t->nodes[t->count] = node;
+          t->coefficients[t->count++] = 0;
+        }
       }
+      slot_of[corner][i] = slot;
       t->coefficients[slot] += coefficient;
     }
   }
