@@ -1013,6 +1013,7 @@ double SurfaceContact::max_step(const Points& from, const double* direction) {
   // Each vertex's motion over the move, once, for the pairs and the guards (a candidate's and a
   // guard's corners were embedded each time: 100k corners against 43k vertices on the sliced hand).
   if (!candidates_.empty() || !guards_.empty()) place(node_move_, &vertex_move_);
+  const bool counted_measured = (measured_ & kCounted) != 0;
   const double t_pairs = min_chunks(static_cast<Index>(candidates_.size()), kNodeChunk, 1.0, &chunk_least_, [&](Index begin, Index end) {
     double t_min = 1;
     for (Index k = begin; k < end; ++k) {
@@ -1045,7 +1046,9 @@ double SurfaceContact::max_step(const Points& from, const double* direction) {
         const auto p = [&](int i) -> Vec3 { return y[i] + t * d[i]; };
         return proximity_at({p(0), p(1), p(2), p(3)}, c.edges).distance;
       };
-      const double start = distance_at(0);
+      // Where the pair was measured at the move's start already (within dhat, at y_: the Newton
+      // step's evaluation there), that distance.
+      const double start = counted_measured && std::isfinite(proximities_[k].distance) ? proximities_[k].distance : distance_at(0);
       if (!(bound > 0) || start - bound > 0) continue;  // cannot come within reach this step
       if (!(start > 0)) {
         t_min = 0;
