@@ -628,7 +628,12 @@ void SurfaceContact::measure(unsigned which) {
       const Candidate& c = candidates_[k];
       if (!(kind(c) & missing)) continue;
       // Every reader asks only whether a pair is within the thickness: those surely beyond it
-      // are left at infinity unmeasured.
+      // (listed beyond it by more than the vertices can have moved since, or with boxes apart by
+      // more) are left at infinity unmeasured.
+      if (c.reference_distance - 2 * reference_motion_ > (1 + kBoundSlack) * settings_.thickness) {
+        proximities_[k].distance = std::numeric_limits<double>::infinity();
+        continue;
+      }
       measure_within(corner_positions(c, y_), c.edges, settings_.thickness, &proximities_[k]);
     }
   });
@@ -698,8 +703,10 @@ void SurfaceContact::cover(const Points& at, const Points* move_end, double swee
       // guards to read them (a guard's g is taken from the placed vertices).
       if (candidates_.empty() && guards_.empty()) {
         forget_measures();
+        reference_motion_ = std::numeric_limits<double>::infinity();
         return;
       }
+      reference_motion_ = moved;
       place(at, &placed_);
       if (placed_.rows() != y_.rows() || placed_ != y_) {
         y_.swap(placed_);
@@ -721,9 +728,11 @@ void SurfaceContact::cover(const Points& at, const Points* move_end, double swee
   if (move_end) {
     reference_nodes_ = *move_end;
     place(reference_nodes_, &reference_);
+    reference_motion_ = sweep;  // from the move's end back to `at`
   } else {
     reference_ = y_;
     reference_nodes_ = at;
+    reference_motion_ = 0;
   }
   rebuild(2 * dhat + 2 * sweep, move_end == nullptr);
 }
@@ -779,6 +788,7 @@ void SurfaceContact::rebuild(double rho, bool made_now) {
       if (near && !faces_across_cut(c)) return;
       const double apart = proximity(c, y).distance;
       if (!(apart <= rho)) return;
+      c.reference_distance = apart;
       // A pair touching now counts as touching in the material too: joined, it is left out (the
       // barrier is infinite at distance 0), as the joins of surfaces touching from the start are.
       // Now is y_, not a move's end the list was made around (where a move not yet shortened by
@@ -848,7 +858,7 @@ void SurfaceContact::rebuild(double rho, bool made_now) {
       for (const auto& [a, a_box] : *near_g) {
         const spatial::Aabb reach = a_box.grown(rho);
         for (const auto& [b, b_box] : *near_h) {
-          if (reach.meets(b_box)) consider({a, b, edges, 0, 0, 0, 0, 0, 0, key}, group_copy_[g], group_copy_[h], near);
+          if (reach.meets(b_box)) consider({a, b, edges, 0, 0, 0, 0, 0, 0, key, 0.0}, group_copy_[g], group_copy_[h], near);
         }
       }
     };
@@ -1019,6 +1029,11 @@ double SurfaceContact::max_step(const Points& from, const double* direction) {
     for (Index k = begin; k < end; ++k) {
       const Candidate& c = candidates_[k];
       if (c.joined || c.sutured) continue;
+      // Listed too far apart to meet in this move, its corners unread: at the move's start it is
+      // at least reference_distance less twice reference_motion_ apart, and over the move each
+      // corner moves at most sweep from the vertices' centre, so at most twice that from its
+      // pair's mean: the bound below exceeds no 4 sweep, and this pair would be skipped there.
+      if (c.reference_distance - 2 * reference_motion_ - 4 * sweep > kBoundSlack * settings_.thickness) continue;
       const std::array<Index, 4> corner = corners(c);
       std::array<Vec3, 4> y, d;
       Vec3 mean = Vec3::Zero();
