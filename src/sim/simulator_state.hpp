@@ -55,6 +55,15 @@ struct SimulatorState {
   // list is a cache of the positions it was last asked about. `contact_changed`: per copy,
   // whether a cut changed it since the surface was last set.
   mutable detail::SurfaceContact surface_contact;
+  // for_each_constraint's scratch: the contact points inside an obstacle (point, obstacle, the
+  // signed distance and the outward normal there).
+  struct Penetration {
+    Index point;
+    int obstacle;
+    double distance;
+    Vec3 normal;
+  };
+  mutable std::vector<Penetration> penetrations;
   std::vector<std::uint8_t> contact_changed;
   Points x, v;
   Eigen::VectorXd mass;
@@ -210,21 +219,35 @@ template <typename Visit>
 void SimulatorState::for_each_constraint(const Points& at, Visit&& visit, bool surface_pairs) const {
   std::array<Index, 16> nodes{};
   std::array<double, 16> coefficients{};
-  for (const EmbeddedPoint& point : contact_points) {
-    Vec3 y = Vec3::Zero();
+  // The points inside obstacles, found in parallel over fixed chunks (every surface vertex is a
+  // contact point: 43k on the sliced hand, whose serial pass took 0.29 ms an evaluation), then
+  // visited in the points' and obstacles' order, as one pass did.
+  penetrations.clear();
+  if (!obstacles.empty()) {
+    detail::append_chunks(static_cast<Index>(contact_points.size()), detail::kNodeChunk, &penetrations,
+                          [&](Index begin, Index end, std::vector<Penetration>* out) {
+                            for (Index p = begin; p < end; ++p) {
+                              const EmbeddedPoint& point = contact_points[static_cast<std::size_t>(p)];
+                              Vec3 y = Vec3::Zero();
+                              for (int k = 0; k < 4; ++k) y += point.weights[k] * at.row(elements[point.tet].nodes[k]).transpose();
+                              for (std::size_t o = 0; o < obstacles.size(); ++o) {
+                                Vec3 n;
+                                const double d = obstacles[o].distance(y, &n);
+                                if (d < 0) out->push_back({p, static_cast<int>(o), d, n});
+                              }
+                            }
+                          });
+  }
+  for (const Penetration& inside : penetrations) {
+    const EmbeddedPoint& point = contact_points[static_cast<std::size_t>(inside.point)];
     for (int k = 0; k < 4; ++k) {
       nodes[k] = elements[point.tet].nodes[k];
       coefficients[k] = point.weights[k];
-      y += coefficients[k] * at.row(nodes[k]).transpose();
     }
-    for (const Obstacle& obstacle : obstacles) {
-      Vec3 n;
-      const double d = obstacle.distance(y, &n);
-      if (d >= 0) continue;
-      // (k / 2) d^2; the Hessian keeps the normal part only (positive semi-definite).
-      visit(nodes, coefficients, 4, 0.5 * contact_stiffness * d * d, Vec3(contact_stiffness * d * n),
-            Mat3(contact_stiffness * n * n.transpose()));
-    }
+    const double d = inside.distance;
+    const Vec3& n = inside.normal;
+    // (k / 2) d^2; the Hessian keeps the normal part only (positive semi-definite).
+    visit(nodes, coefficients, 4, 0.5 * contact_stiffness * d * d, Vec3(contact_stiffness * d * n), Mat3(contact_stiffness * n * n.transpose()));
   }
   // Slips below this per step are held as by a stiff spring (see Obstacle::friction).
   const double static_slip = kStaticSlipShare * mean_edge;
