@@ -175,11 +175,11 @@ struct Potential {
 
   // The surface contact's active terms (7.4k at most on the sliced hand, where taking them on one
   // thread, each term's gradient and its copy into the ledger, took 1.1 to 1.35 ms an evaluation,
-  // 0.14 ms now): their energy, their gradient added into g, and, with `hessian`, their copies appended
-  // to the ledger. In parallel over groups of the terms' fixed chunks, each group summing into its
-  // own gradient (the first into g), the groups then added in order: the number of groups follows
-  // the terms and nodes, not the threads, so neither do the sums. O(terms x nodes each + groups x
-  // nodes).
+  // 0.14 ms now): their energy, their gradient added into g, and, with `hessian`, their copies
+  // appended to the ledger. In parallel over groups of the terms' fixed chunks, each group
+  // summing into its own gradient (the first into g), the groups then added in order: the number
+  // of groups follows the terms and nodes, not the threads, so neither do the sums.
+  // O(terms x nodes each + groups x nodes).
   double surface_terms(const Points& at, std::vector<double>* g, bool hessian) const {
     if (!s.surface_contact.enabled()) return 0;
     const std::vector<std::vector<detail::ActiveTerm>>& chunks = s.surface_contact.active_chunks(at);
