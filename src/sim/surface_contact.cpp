@@ -200,6 +200,7 @@ void SurfaceContact::clear_surface() {
   friction_.clear();
   guards_.clear();
   rho_ = -1;
+  y_nodes_.resize(0, 3);
   forget_measures();
   tree_built_ = false;
   pairs_radius_ = -1;
@@ -686,6 +687,11 @@ double SurfaceContact::motion_since(const Points& at, const Points& since, doubl
 
 void SurfaceContact::cover(const Points& at, const Points* move_end, double sweep) {
   if (sutures_changed_) mark_joined();
+  // Asked again, with no move, at the node positions y_ was placed from under this list: the list
+  // holds there (it held, or was made with room, for them) and y_ stands. A step's end, the next
+  // step's start and CCD's first move from an evaluated point look at one position several
+  // times, and each placed every vertex and measured their motion again.
+  if (!move_end && rho_ >= 0 && y_nodes_.rows() == at.rows() && y_nodes_ == at) return;
   const double dhat = settings_.thickness;
   // How far any vertex moved relative to the others since the list was built, at `at` and at the
   // move's end: a motion common to all changes no distance, so falling pieces keep their list
@@ -707,7 +713,9 @@ void SurfaceContact::cover(const Points& at, const Points* move_end, double swee
         return;
       }
       reference_motion_ = moved;
+      if (y_nodes_.rows() == at.rows() && y_nodes_ == at) return;
       place(at, &placed_);
+      y_nodes_ = at;
       if (placed_.rows() != y_.rows() || placed_ != y_) {
         y_.swap(placed_);
         forget_measures();
@@ -716,6 +724,7 @@ void SurfaceContact::cover(const Points& at, const Points* move_end, double swee
     }
   }
   place(at, &y_);
+  y_nodes_ = at;
   forget_measures();
   // The list is made around the move's end, with room for the whole move back to `at` and for
   // as much again beyond it, and dhat / 2 more (more slack, for one more move like this one, was

@@ -463,6 +463,8 @@ class SurfaceContact {
   std::vector<Candidate> candidates_;
   std::vector<collision::Proximity> proximities_;
   Points reference_, y_, placed_;
+  // The node positions y_ was placed from (see cover).
+  Points y_nodes_;
   // The nodes' positions where the candidates were listed (reference_ is the vertices').
   Points reference_nodes_;
   // A bound of how far the vertices at y_ have moved from reference_, beyond a motion common to
