@@ -257,12 +257,7 @@ void Simulator::set_anchors(std::vector<Anchor> anchors) {
 const std::vector<Simulator::Anchor>& Simulator::anchors() const { return state_->anchors; }
 Index Simulator::num_springs() const { return static_cast<Index>(state_->springs.size()); }
 
-Vec3 Simulator::position(const EmbeddedPoint& p) const {
-  const SimulatorState& s = *state_;
-  Vec3 y = Vec3::Zero();
-  for (int k = 0; k < 4; ++k) y += p.weights[k] * s.x.row(s.elements[p.tet].nodes[k]).transpose();
-  return y;
-}
+Vec3 Simulator::position(const EmbeddedPoint& p) const { return state_->point_position(p, state_->x); }
 
 void SimulatorState::carry_new_nodes(Index first_new_node, std::span<const Index> new_node_source) {
   if (first_new_node != num_nodes()) throw Error(ErrorKind::kInvalidArgument, "remesh: the node counts do not match the cut report");

@@ -202,6 +202,13 @@ struct SimulatorState {
   /// updates the elements' SVD warm starts. Needs a fresh structure (refresh_structure).
   double assemble_hessian(const Points& at, std::vector<double>* gradient);
 
+  /// An embedded point's position at node positions `at`: sum_k w_k at(n_k) over its tet's nodes.
+  Vec3 point_position(const EmbeddedPoint& p, const Points& at) const {
+    Vec3 y = Vec3::Zero();
+    for (int k = 0; k < 4; ++k) y += p.weights[k] * at.row(elements[p.tet].nodes[k]).transpose();
+    return y;
+  }
+
   /// Lags obstacle friction for the step starting at `start` (see obstacle_friction). O(points x
   /// obstacles).
   void lag_obstacle_friction();
@@ -227,9 +234,7 @@ void SimulatorState::for_each_constraint(const Points& at, Visit&& visit, bool s
     detail::append_chunks(static_cast<Index>(contact_points.size()), detail::kNodeChunk, &penetrations,
                           [&](Index begin, Index end, std::vector<Penetration>* out) {
                             for (Index p = begin; p < end; ++p) {
-                              const EmbeddedPoint& point = contact_points[static_cast<std::size_t>(p)];
-                              Vec3 y = Vec3::Zero();
-                              for (int k = 0; k < 4; ++k) y += point.weights[k] * at.row(elements[point.tet].nodes[k]).transpose();
+                              const Vec3 y = point_position(contact_points[static_cast<std::size_t>(p)], at);
                               for (std::size_t o = 0; o < obstacles.size(); ++o) {
                                 Vec3 n;
                                 const double d = obstacles[o].distance(y, &n);
