@@ -687,11 +687,12 @@ double SurfaceContact::motion_since(const Points& at, const Points& since, doubl
 
 void SurfaceContact::cover(const Points& at, const Points* move_end, double sweep) {
   if (sutures_changed_) mark_joined();
-  // Asked again, with no move, at the node positions y_ was placed from under this list: the list
-  // holds there (it held, or was made with room, for them) and y_ stands. A step's end, the next
+  // Asked again at the node positions y_ was placed from under this list: y_ stands, and with no
+  // move the list holds there (it held, or was made with room, for them). A step's end, the next
   // step's start and CCD's first move from an evaluated point look at one position several
   // times, and each placed every vertex and measured their motion again.
-  if (!move_end && rho_ >= 0 && y_nodes_.rows() == at.rows() && y_nodes_ == at) return;
+  const bool placed_at = rho_ >= 0 && y_nodes_.rows() == at.rows() && y_nodes_ == at;
+  if (placed_at && !move_end) return;
   const double dhat = settings_.thickness;
   // How far any vertex moved relative to the others since the list was built, at `at` and at the
   // move's end: a motion common to all changes no distance, so falling pieces keep their list
@@ -713,7 +714,7 @@ void SurfaceContact::cover(const Points& at, const Points* move_end, double swee
         return;
       }
       reference_motion_ = moved;
-      if (y_nodes_.rows() == at.rows() && y_nodes_ == at) return;
+      if (placed_at) return;
       place(at, &placed_);
       y_nodes_ = at;
       if (placed_.rows() != y_.rows() || placed_ != y_) {
