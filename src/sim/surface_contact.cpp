@@ -10,6 +10,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numeric>
 #include <tuple>
 
 namespace tetcut::sim::detail {
@@ -25,10 +26,11 @@ constexpr double kAdvanceShare = 0.9;
 // Conservative advancement gives up refining after this many advances and keeps the safe time
 // reached (a pair sliding along another approaches slowly; the next Newton iteration goes on).
 constexpr int kMaxAdvances = 64;
-// The farthest one Newton step may move the surface's parts relative to each other, in contact
-// thicknesses: a longer direction is shortened to it before continuous collision detection (a
-// trust region). The candidate list covers the whole move (radius 2 dhat + 2 sweep), so its
-// pairs grow as the cube of the move: a wild direction on Figure 4's pile (500 to 700 dhat) made
+// The farthest one Newton step may move the surface's parts that may meet over it from the
+// middle of their motions (relative to each other: twice this), in contact thicknesses: a longer
+// direction is shortened to it before continuous collision detection (a trust region; pieces
+// that stay apart over the whole move do not count). The candidate list covers the whole move
+// (radius 2 dhat + the relative motion), so its pairs grow as the cube of the move: a wild direction on Figure 4's pile (500 to 700 dhat) made
 // a list that ran out of 16 GB, and 10 dhat still took 12 GB there. At 2, the scenes' ordinary
 // steps are rarely shortened (the flap 41 times in 150 steps, by at most a quarter; 36 sticks
 // twice), with the same Newton iterations.
@@ -194,7 +196,9 @@ void SurfaceContact::clear_surface() {
   edge_triangle_start_.assign(1, 0);
   edge_triangles_.clear();
   copy_nodes_.clear();
-  surface_nodes_.clear();
+  pieces_ = 0;
+  piece_vertices_ = {};
+  piece_nodes_ = {};
   candidates_.clear();
   proximities_.clear();
   friction_.clear();
@@ -240,17 +244,13 @@ void SurfaceContact::set_surface(const MaterialSurface& surface, std::span<const
   vertex_nodes_.resize(V);
   vertex_weights_.resize(V);
   vertex_copy_.resize(V);
-  surface_nodes_.clear();
   weight_bound_ = 1;
   for (std::size_t v = 0; v < V; ++v) {
     vertex_copy_[v] = surface.vertex_tet[v];
     vertex_nodes_[v] = copy_nodes_[static_cast<std::size_t>(vertex_copy_[v])];
     vertex_weights_[v] = surface.vertex_weights.row(static_cast<Index>(v)).transpose();
-    surface_nodes_.insert(surface_nodes_.end(), vertex_nodes_[v].begin(), vertex_nodes_[v].end());
     weight_bound_ = std::max(weight_bound_, vertex_weights_[v].cwiseAbs().sum());
   }
-  std::sort(surface_nodes_.begin(), surface_nodes_.end());
-  surface_nodes_.erase(std::unique(surface_nodes_.begin(), surface_nodes_.end()), surface_nodes_.end());
 
   triangles_.resize(F);
   triangle_copy_.assign(surface.triangle_tet.begin(), surface.triangle_tet.end());
@@ -294,6 +294,7 @@ void SurfaceContact::set_surface(const MaterialSurface& surface, std::span<const
   settings_.stiffness = options.stiffness > 0 ? options.stiffness : youngs_modulus * mean_edge_;
   settings_.friction = options.friction;
   rest_y_ = s.vertices;
+  find_pieces(static_cast<Index>(rest.rows()));
   // Rest normals and each vertex's triangles, for the guards (lag_guards).
   rest_normals_.resize(F);
   vertex_triangle_start_.assign(V + 1, 0);
@@ -631,7 +632,7 @@ void SurfaceContact::measure(unsigned which) {
       // Every reader asks only whether a pair is within the thickness: those surely beyond it
       // (listed beyond it by more than the vertices can have moved since, or with boxes apart by
       // more) are left at infinity unmeasured.
-      if (c.reference_distance - 2 * reference_motion_ > (1 + kBoundSlack) * settings_.thickness) {
+      if (c.reference_distance - reference_relative_ > (1 + kBoundSlack) * settings_.thickness) {
         proximities_[k].distance = std::numeric_limits<double>::infinity();
         continue;
       }
@@ -640,52 +641,194 @@ void SurfaceContact::measure(unsigned which) {
   });
 }
 
-template <typename NodeMotion>
-double SurfaceContact::surface_motion(const NodeMotion& node_motion) const {
-  // Each vertex's motion from its nodes' (sum_i w_i d_i), relative to the centre of the box of
-  // them all: two passes over the vertices, in parallel, nothing placed or allocated. O(V).
-  const auto V = static_cast<Index>(vertex_nodes_.size());
-  if (V == 0) return 0;
-  const auto motion = [&](Index v) { return embedded(v, node_motion); };
-  const Index chunks = (V + kNodeChunk - 1) / kNodeChunk;
-  motion_boxes_.assign(static_cast<std::size_t>(chunks), spatial::Aabb{});
-  for_chunks(V, kNodeChunk, [&](Index begin, Index end, Index chunk) {
-    for (Index v = begin; v < end; ++v) motion_boxes_[static_cast<std::size_t>(chunk)].extend(motion(v));
-  });
-  spatial::Aabb all;
-  for (const spatial::Aabb& box : motion_boxes_) all.extend(box);
-  const Vec3 centre = 0.5 * (all.min + all.max);
-  motion_largest_.assign(static_cast<std::size_t>(chunks), 0.0);
-  for_chunks(V, kNodeChunk, [&](Index begin, Index end, Index chunk) {
-    double largest = 0;
-    for (Index v = begin; v < end; ++v) largest = std::max(largest, (motion(v) - centre).squaredNorm());
-    motion_largest_[static_cast<std::size_t>(chunk)] = largest;
-  });
-  return std::sqrt(*std::max_element(motion_largest_.begin(), motion_largest_.end()));
-}
-
-double SurfaceContact::motion_since(const Points& at, const Points& since, double allowed) const {
-  // First a bound from the nodes alone: a vertex moves by sum_i w_i d_i (the weights sum to 1),
-  // so beyond a common translation T by at most sum_i |w_i| max_i |d_i - T|. O(surface nodes),
-  // 2.6k against 46k vertices on the femur; but loose after a cut, where nodes of copies with
-  // little material swing further than any vertex they carry: then the vertices themselves.
-  if (!surface_nodes_.empty()) {
-    Vec3 low = Vec3::Constant(std::numeric_limits<double>::infinity()), high = -low;
-    for (const Index n : surface_nodes_) {
-      const Vec3 d = (at.row(n) - since.row(n)).transpose();
-      low = low.cwiseMin(d);
-      high = high.cwiseMax(d);
+void SurfaceContact::find_pieces(Index nodes) {
+  // Union-find over the nodes, joined through the copies' corners: two copies that share a node
+  // are one piece. O(copies alpha).
+  std::vector<Index> parent(static_cast<std::size_t>(nodes));
+  std::iota(parent.begin(), parent.end(), 0);
+  const auto root = [&](Index n) {
+    while (parent[static_cast<std::size_t>(n)] != n) {
+      parent[static_cast<std::size_t>(n)] = parent[static_cast<std::size_t>(parent[static_cast<std::size_t>(n)])];
+      n = parent[static_cast<std::size_t>(n)];
     }
-    const Vec3 centre = 0.5 * (low + high);
-    double largest = 0;
-    for (const Index n : surface_nodes_) largest = std::max(largest, ((at.row(n) - since.row(n)).transpose() - centre).squaredNorm());
-    const double bound = weight_bound_ * std::sqrt(largest);
-    if (bound <= allowed) return bound;
+    return n;
+  };
+  for (const std::array<Index, 4>& corners : copy_nodes_) {
+    for (int i = 1; i < 4; ++i) {
+      const Index a = root(corners[0]), b = root(corners[static_cast<std::size_t>(i)]);
+      if (a != b) parent[static_cast<std::size_t>(std::max(a, b))] = std::min(a, b);
+    }
   }
-  return surface_motion([&](Index n) { return Vec3((at.row(n) - since.row(n)).transpose()); });
+  // Pieces numbered by their first vertex; the vertices and the nodes that carry them by piece,
+  // ascending within each (with one piece, the vertices' own order), and work items over both.
+  const auto V = static_cast<Index>(vertex_nodes_.size());
+  std::vector<Index> piece_of_root(static_cast<std::size_t>(nodes), -1), vertex_piece(static_cast<std::size_t>(V));
+  std::vector<Index> node_piece(static_cast<std::size_t>(nodes), -1);
+  pieces_ = 0;
+  for (Index v = 0; v < V; ++v) {
+    Index& piece = piece_of_root[static_cast<std::size_t>(root(vertex_nodes_[v][0]))];
+    if (piece < 0) piece = pieces_++;
+    vertex_piece[static_cast<std::size_t>(v)] = piece;
+    for (const Index n : vertex_nodes_[v]) node_piece[static_cast<std::size_t>(n)] = piece;
+  }
+  const auto order = [&](const std::vector<Index>& piece_of, PieceOrder* out) {
+    std::vector<Index> start(static_cast<std::size_t>(pieces_) + 1, 0);
+    for (const Index p : piece_of) {
+      if (p >= 0) ++start[static_cast<std::size_t>(p) + 1];
+    }
+    std::partial_sum(start.begin(), start.end(), start.begin());
+    out->elements.resize(static_cast<std::size_t>(start.back()));
+    std::vector<Index> next(start.begin(), start.end() - 1);
+    for (std::size_t k = 0; k < piece_of.size(); ++k) {
+      if (piece_of[k] >= 0) out->elements[static_cast<std::size_t>(next[static_cast<std::size_t>(piece_of[k])]++)] = static_cast<Index>(k);
+    }
+    out->identity = true;
+    for (std::size_t k = 0; k < out->elements.size(); ++k) out->identity = out->identity && out->elements[k] == static_cast<Index>(k);
+    out->items.clear();
+    for (Index p = 0; p < pieces_; ++p) {
+      for (Index b = start[static_cast<std::size_t>(p)]; b < start[static_cast<std::size_t>(p) + 1]; b += kNodeChunk) {
+        out->items.push_back({p, b, std::min(b + kNodeChunk, start[static_cast<std::size_t>(p) + 1])});
+      }
+    }
+  };
+  order(vertex_piece, &piece_vertices_);
+  order(node_piece, &piece_nodes_);
 }
 
-void SurfaceContact::cover(const Points& at, const Points* move_end, double sweep) {
+// Work items (of up to kNodeChunk elements) per parallel task: the surface nodes' motions (a
+// few thousand, several times a step) went faster on one thread than dispatched item by item.
+constexpr Index kItemsPerTask = 8;
+
+template <typename Value>
+void SurfaceContact::item_boxes(const PieceOrder& order, const Value& value, std::vector<spatial::Aabb>* boxes) const {
+  item_boxes_.resize(order.items.size());
+  for_chunks(static_cast<Index>(order.items.size()), kItemsPerTask, [&](Index begin, Index end, Index) {
+    for (Index i = begin; i < end; ++i) {
+      const auto& [piece, first, last] = order.items[static_cast<std::size_t>(i)];
+      spatial::Aabb box;  // kept in registers
+      order.for_each(first, last, [&](Index e) { box.extend(value(e)); });
+      item_boxes_[static_cast<std::size_t>(i)] = box;
+    }
+  });
+  boxes->assign(static_cast<std::size_t>(pieces_), spatial::Aabb{});
+  for (std::size_t i = 0; i < order.items.size(); ++i) (*boxes)[static_cast<std::size_t>(order.items[i][0])].extend(item_boxes_[i]);
+}
+
+template <typename Value>
+void SurfaceContact::piece_motion(const PieceOrder& order, const Value& value, double scale, PieceMotion* out) const {
+  // Two passes over the elements, in parallel, nothing allocated once warm; per piece the same
+  // bits on any number of threads.
+  item_boxes(order, value, &piece_scratch_);
+  out->centre.resize(static_cast<std::size_t>(pieces_));
+  out->half.resize(static_cast<std::size_t>(pieces_));
+  for (std::size_t p = 0; p < piece_scratch_.size(); ++p) {
+    out->centre[p] = 0.5 * (piece_scratch_[p].min + piece_scratch_[p].max);
+    out->half[p] = scale * 0.5 * (piece_scratch_[p].max - piece_scratch_[p].min);
+  }
+  item_largest_.resize(order.items.size());
+  for_chunks(static_cast<Index>(order.items.size()), kItemsPerTask, [&](Index begin, Index end, Index) {
+    for (Index i = begin; i < end; ++i) {
+      const auto& [piece, first, last] = order.items[static_cast<std::size_t>(i)];
+      const Vec3 centre = out->centre[static_cast<std::size_t>(piece)];
+      double largest = 0;
+      order.for_each(first, last, [&](Index e) { largest = std::max(largest, (value(e) - centre).squaredNorm()); });
+      item_largest_[static_cast<std::size_t>(i)] = largest;
+    }
+  });
+  out->radius.assign(static_cast<std::size_t>(pieces_), 0.0);
+  for (std::size_t i = 0; i < order.items.size(); ++i) {
+    double& r = out->radius[static_cast<std::size_t>(order.items[i][0])];
+    r = std::max(r, item_largest_[i]);
+  }
+  for (double& r : out->radius) r = scale * std::sqrt(r);
+}
+
+template <typename NodeMotion>
+void SurfaceContact::vertex_motion(const NodeMotion& node_motion, PieceMotion* out) const {
+  piece_motion(piece_vertices_, [&](Index v) { return embedded(v, node_motion); }, 1.0, out);
+}
+
+void SurfaceContact::node_motion(const Points& at, const Points& since, PieceMotion* out) const {
+  piece_motion(piece_nodes_, [&](Index n) { return Vec3((at.row(n) - since.row(n)).transpose()); }, weight_bound_, out);
+}
+
+template <typename Position>
+void SurfaceContact::piece_boxes(const Position& position, PieceBoxes* out) const {
+  // With one piece no gap is ever asked for: nothing to place.
+  if (pieces_ == 1) {
+    out->boxes.assign(1, spatial::Aabb{});
+  } else {
+    item_boxes(piece_vertices_, position, &out->boxes);
+  }
+  out->by_low_x.resize(static_cast<std::size_t>(pieces_));
+  std::iota(out->by_low_x.begin(), out->by_low_x.end(), 0);
+  std::sort(out->by_low_x.begin(), out->by_low_x.end(), [&](Index a, Index b) {
+    return std::tie(out->boxes[static_cast<std::size_t>(a)].min.x(), a) < std::tie(out->boxes[static_cast<std::size_t>(b)].min.x(), b);
+  });
+}
+
+template <typename Visit>
+bool SurfaceContact::for_near_pieces(const PieceBoxes& boxes, double within, const Visit& visit) const {
+  // Sweep and prune along x: each piece against those that start, in x, before it ends plus
+  // `within`; O(C log C) for the order (made with the boxes) plus the pairs that overlap in x.
+  const std::vector<Index>& order = boxes.by_low_x;
+  for (std::size_t i = 0; i < order.size(); ++i) {
+    const Index p = order[i];
+    const spatial::Aabb& a = boxes.boxes[static_cast<std::size_t>(p)];
+    if (!visit(p, p, 0.0)) return false;
+    for (std::size_t j = i + 1; j < order.size(); ++j) {
+      const Index q = order[j];
+      const spatial::Aabb& b = boxes.boxes[static_cast<std::size_t>(q)];
+      if (b.min.x() - a.max.x() > within) break;
+      const double gap = a.gap(b);
+      if (gap <= within && !visit(p, q, gap)) return false;
+    }
+  }
+  return true;
+}
+
+double SurfaceContact::PieceMotion::farthest() const {
+  // The largest relative motion of any two pieces: their centres lie in the box of all
+  // centres, so no two are further apart than its diagonal.
+  spatial::Aabb all;
+  double radius_max = 0;
+  for (std::size_t c = 0; c < centre.size(); ++c) {
+    all.extend(centre[c]);
+    radius_max = std::max(radius_max, radius[c]);
+  }
+  return centre.empty() ? 0.0 : (all.max - all.min).norm() + 2 * radius_max;
+}
+
+SurfaceContact::MotionCheck SurfaceContact::check_motion(const Points& at, const Points* move_end, const Points& since,
+                                                         const PieceBoxes& boxes, double add, double limit, double apart,
+                                                         double within) const {
+  // A pair of pieces holds at b when b + add <= limit or gap - b > apart: the larger b falls, so
+  // the check at the larger of the two ends' motions is the check at each end. Pairs whose boxes
+  // lay apart by more than any two pieces moved relative to each other, and `apart`, hold.
+  const auto holds_at = [&](const PieceMotion& motion, double* relative) {
+    const double farthest = motion.farthest();
+    return for_near_pieces(boxes, std::max(farthest + apart, relative ? within : 0.0), [&](Index p, Index q, double gap) {
+      const double b = motion.relative(p, q);
+      if (!(b + add <= limit) && !(gap - b > apart)) return false;
+      if (relative && gap <= within) *relative = std::max(*relative, b);
+      return true;
+    });
+  };
+  // Each end by the nodes' bound, or by the vertices where that does not hold.
+  const auto holds = [&](const Points& to, double* relative) {
+    node_motion(to, since, &motion_scratch_);
+    if (relative) *relative = 0;
+    if (holds_at(motion_scratch_, relative)) return true;
+    vertex_motion([&](Index n) { return Vec3((to.row(n) - since.row(n)).transpose()); }, &motion_scratch_);
+    if (relative) *relative = 0;
+    return holds_at(motion_scratch_, relative);
+  };
+  MotionCheck result;
+  result.holds = holds(at, &result.relative) && (!move_end || holds(*move_end, nullptr));
+  return result;
+}
+
+void SurfaceContact::cover(const Points& at, const Points* move_end, double move_relative) {
   if (sutures_changed_) mark_joined();
   // Asked again at the node positions y_ was placed from under this list: y_ stands, and with no
   // move the list holds there (it held, or was made with room, for them). A step's end, the next
@@ -694,26 +837,24 @@ void SurfaceContact::cover(const Points& at, const Points* move_end, double swee
   const bool placed_at = rho_ >= 0 && y_nodes_.rows() == at.rows() && y_nodes_ == at;
   if (placed_at && !move_end) return;
   const double dhat = settings_.thickness;
-  // How far any vertex moved relative to the others since the list was built, at `at` and at the
-  // move's end: a motion common to all changes no distance, so falling pieces keep their list
-  // (see surface_motion). Along the move the vertices' motion from the reference is, relative to
-  // the centres interpolated between the ends', at most the larger of the two (each vertex's
-  // motion is affine in the move's parameter), so no two vertices come closer along the move by
-  // more than twice that. Tighter than the motion so far plus the move's sweep when the move goes
-  // on where the last went.
+  // How far the vertices moved relative to each other since the list was built, piece by piece,
+  // at `at` and at the move's end: a motion common to a piece changes no distance within it, so
+  // falling pieces keep their list, and two pieces whose boxes lay apart by more than their
+  // relative motion and dhat have no pair to list (a piece falling away from another). Along the
+  // move two vertices' relative motion from the reference is affine in the move's parameter, so
+  // at most the larger of the two ends'. Tighter than the motion so far plus the move's when the
+  // move goes on where the last went.
   if (rho_ >= 0 && reference_nodes_.rows() == at.rows()) {
-    const double allowed = (rho_ - dhat) / 2;
-    const double moved = motion_since(at, reference_nodes_, allowed);
-    const double moving = move_end ? motion_since(*move_end, reference_nodes_, allowed) : moved + sweep;
-    if (2 * std::max(moved, moving) + dhat <= rho_) {
+    const MotionCheck moved = check_motion(at, move_end, reference_nodes_, reference_boxes_, dhat, rho_, dhat, rho_);
+    if (moved.holds) {
       // The list holds: the vertices are placed only where there are candidates to measure or
       // guards to read them (a guard's g is taken from the placed vertices).
       if (candidates_.empty() && guards_.empty()) {
         forget_measures();
-        reference_motion_ = std::numeric_limits<double>::infinity();
+        reference_relative_ = std::numeric_limits<double>::infinity();
         return;
       }
-      reference_motion_ = moved;
+      reference_relative_ = moved.relative;
       if (placed_at) return;
       place(at, &placed_);
       y_nodes_ = at;
@@ -735,16 +876,18 @@ void SurfaceContact::cover(const Points& at, const Points* move_end, double swee
   // step, 62 rebuilds in its first 60 steps became 30 (the list was made around the move's start,
   // and each step's second move, the Newton step after the first guess CCD had shortened, went
   // past it); the folded flap 89 in 60 steps became 39, the hanging femur 78 in 60 became 41.
+  // (Pieces that max_step found apart over the whole move may move more than move_relative
+  // against each other; they stay beyond dhat over it, which is all the skip in measure needs.)
   if (move_end) {
     reference_nodes_ = *move_end;
     place(reference_nodes_, &reference_);
-    reference_motion_ = sweep;  // from the move's end back to `at`
+    reference_relative_ = move_relative;  // from the move's end back to `at`
   } else {
     reference_ = y_;
     reference_nodes_ = at;
-    reference_motion_ = 0;
+    reference_relative_ = 0;
   }
-  rebuild(2 * dhat + 2 * sweep, move_end == nullptr);
+  rebuild(2 * dhat + move_relative, move_end == nullptr);
 }
 
 void SurfaceContact::rebuild(double rho, bool made_now) {
@@ -766,6 +909,7 @@ void SurfaceContact::rebuild(double rho, bool made_now) {
       }
     }
   });
+  piece_boxes(corner, &reference_boxes_);
   cover_copy_pairs(rho);
   // The pairs of copies whose boxes come within rho, then their primitives against each other.
   // Per fixed chunk of pairs, joined in chunk order: the pairs are in (g, h) order, and so are
@@ -916,12 +1060,14 @@ std::vector<std::array<Index, 3>> SurfaceContact::candidate_pairs(Index* listed_
 void SurfaceContact::cover_copy_pairs(double rho) {
   const double dhat = settings_.thickness;
   // Valid while no gap between two copies' boxes can have shrunk from more than the list's
-  // radius to rho or less: boxes move with their vertices (see surface_motion).
+  // radius to rho or less: boxes move with their vertices, and those of pieces that lay apart
+  // by more than their relative motion and rho meet no copy of the other (see check_motion).
   if (pairs_radius_ >= 0 && pairs_reference_.rows() == reference_nodes_.rows() &&
-      rho + 2 * motion_since(reference_nodes_, pairs_reference_, (pairs_radius_ - rho) / 2) <= pairs_radius_) {
+      check_motion(reference_nodes_, nullptr, pairs_reference_, pairs_boxes_, rho, pairs_radius_, rho, rho).holds) {
     return;
   }
   pairs_reference_ = reference_nodes_;
+  pairs_boxes_ = reference_boxes_;
   pairs_radius_ = rho + 2 * kPairSlack * dhat;
   ++pair_rebuilds_;
   const double radius = pairs_radius_;
@@ -1021,15 +1167,47 @@ void SurfaceContact::clear_sutures() {
 
 double SurfaceContact::max_step(const Points& from, const double* direction) {
   if (!enabled()) return 1;
-  // How far any vertex moves over the whole step, relative to the others (see surface_motion).
+  // How far parts of the surface that may meet move relative to each other over the whole step,
+  // piece by piece (see PieceMotion): two pieces whose boxes where the move starts lie
+  // apart by more than their relative motion over all of it and dhat cannot meet in it, and do
+  // not count (a piece falling away from another, or beside it).
+  const double dhat = settings_.thickness;
   const Eigen::Map<const Points> motion(direction, from.rows(), 3);
-  const double whole_sweep = surface_motion([&](Index n) { return Vec3(motion.row(n).transpose()); });
-  if (!(whole_sweep > 0)) return 1;
+  vertex_motion([&](Index n) { return Vec3(motion.row(n).transpose()); }, &move_motion_);
+  const double moving = move_motion_.farthest();
+  // The largest relative motion of pieces that may meet, given their boxes at `from` or lower
+  // bounds of them (apart by `gap` less `moved`).
+  const auto largest = [&](const PieceBoxes& boxes, const PieceMotion* since) {
+    double whole = 0;
+    const double moved = since ? since->farthest() : 0.0;
+    for_near_pieces(boxes, moving + moved + dhat, [&](Index p, Index q, double gap) {
+      const double relative = move_motion_.relative(p, q);
+      if (relative > whole && !(gap - (since ? since->relative(p, q) : 0.0) - relative > dhat)) whole = relative;
+      return true;
+    });
+    return whole;
+  };
+  // One piece: its own motion. Of several, first from the boxes where the list was made and the
+  // nodes' motion since (no vertex placed); where that would shorten the move, from the boxes at
+  // `from`.
+  double whole = pieces_ == 1 ? move_motion_.relative(0, 0) : 0.0;
+  if (pieces_ > 1) {
+    whole = std::numeric_limits<double>::infinity();
+    if (rho_ >= 0 && reference_nodes_.rows() == from.rows()) {
+      node_motion(from, reference_nodes_, &from_motion_);
+      whole = largest(reference_boxes_, &from_motion_);
+    }
+    if (whole > 2 * kMaxSweep * dhat) {
+      piece_boxes([&](Index v) { return embedded(v, [&](Index n) { return Vec3(from.row(n).transpose()); }); }, &from_boxes_);
+      whole = largest(from_boxes_, nullptr);
+    }
+  }
+  if (!(whole > 0)) return 1;
   // The move considered: the direction, shortened to the trust region where it goes beyond it.
-  const double share = std::min(1.0, kMaxSweep * settings_.thickness / whole_sweep), sweep = share * whole_sweep;
+  const double share = std::min(1.0, 2 * kMaxSweep * dhat / whole), relative = share * whole;
   node_move_ = share * motion;
   move_end_ = from + node_move_;
-  cover(from, &move_end_, sweep);
+  cover(from, &move_end_, relative);
   // Each vertex's motion over the move, once, for the pairs and the guards (a candidate's and a
   // guard's corners were embedded each time: 100k corners against 43k vertices on the sliced hand).
   if (!candidates_.empty() || !guards_.empty()) place(node_move_, &vertex_move_);
@@ -1040,10 +1218,11 @@ double SurfaceContact::max_step(const Points& from, const double* direction) {
       const Candidate& c = candidates_[k];
       if (c.joined || c.sutured) continue;
       // Listed too far apart to meet in this move, its corners unread: at the move's start it is
-      // at least reference_distance less twice reference_motion_ apart, and over the move each
-      // corner moves at most sweep from the vertices' centre, so at most twice that from its
-      // pair's mean: the bound below exceeds no 4 sweep, and this pair would be skipped there.
-      if (c.reference_distance - 2 * reference_motion_ - 4 * sweep > kBoundSlack * settings_.thickness) continue;
+      // at least reference_distance less reference_relative_ apart, and over the move its
+      // corners move at most `relative` against each other, so each at most that from its pair's
+      // mean: the bound below exceeds no 2 relative, and this pair would be skipped there. (Of
+      // pieces found apart over the whole move above, the pair stays beyond dhat anyway.)
+      if (c.reference_distance - reference_relative_ - 2 * relative > kBoundSlack * settings_.thickness) continue;
       const std::array<Index, 4> corner = corners(c);
       std::array<Vec3, 4> y, d;
       Vec3 mean = Vec3::Zero();

@@ -24,6 +24,12 @@ struct Aabb {
     max = max.cwiseMax(b.max);
   }
   bool meets(const Aabb& b) const { return (min.array() <= b.max.array()).all() && (b.min.array() <= max.array()).all(); }
+  /// The Euclidean distance between the two boxes (0 where they meet): no point of one is nearer
+  /// any point of the other.
+  double gap(const Aabb& b) const {
+    const Vec3 apart = (min - b.max).cwiseMax(b.min - max).cwiseMax(0.0);
+    return apart.norm();
+  }
   /// The box grown by `by` on every side: it meets another box when the two come within `by`.
   Aabb grown(double by) const {
     Aabb out = *this;

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <mutex>
 #include <random>
 #include <vector>
@@ -23,6 +24,37 @@ std::vector<Aabb> random_boxes(int count, unsigned seed) {
     box.extend(Vec3(corner + Vec3(size(random), size(random), size(random))));
   }
   return boxes;
+}
+
+// The gap between two boxes: 0 where they meet, else the distance of their nearest points, which
+// no two points of them beat (sampled).
+TEST(Aabb, GapIsTheDistanceOfTheNearestPoints) {
+  Aabb unit;
+  unit.extend(Vec3(0, 0, 0));
+  unit.extend(Vec3(1, 1, 1));
+  Aabb beside;
+  beside.extend(Vec3(3, 0.5, 0.5));
+  beside.extend(Vec3(4, 2, 2));
+  EXPECT_DOUBLE_EQ(unit.gap(beside), 2);
+  EXPECT_DOUBLE_EQ(beside.gap(unit), 2);
+  Aabb corner;
+  corner.extend(Vec3(2, 3, 1.5));
+  EXPECT_DOUBLE_EQ(unit.gap(corner), std::sqrt(1 + 4 + 0.25));
+  EXPECT_EQ(unit.gap(unit.grown(-0.25)), 0);  // inside
+  const std::vector<Aabb> boxes = random_boxes(40, 7);
+  std::mt19937 random(11);
+  std::uniform_real_distribution<double> share(0, 1);
+  for (const Aabb& a : boxes) {
+    for (const Aabb& b : boxes) {
+      const double gap = a.gap(b);
+      EXPECT_EQ(gap == 0, a.meets(b));
+      for (int k = 0; k < 20; ++k) {
+        const Vec3 p = a.min + (a.max - a.min).cwiseProduct(Vec3(share(random), share(random), share(random)));
+        const Vec3 q = b.min + (b.max - b.min).cwiseProduct(Vec3(share(random), share(random), share(random)));
+        EXPECT_GE((p - q).norm(), gap * (1 - 1e-12));
+      }
+    }
+  }
 }
 
 TEST(BoxTree, QueryFindsEveryBoxThatMeetsInOrder) {
