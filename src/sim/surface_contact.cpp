@@ -35,6 +35,11 @@ constexpr int kMaxAdvances = 64;
 // steps are rarely shortened (the flap 41 times in 150 steps, by at most a quarter; 36 sticks
 // twice), with the same Newton iterations.
 constexpr double kMaxSweep = 2;
+// The largest turn (radians, of the linear fit to a piece's motion) one Newton move may take where
+// the trust region takes the turn out. A list made at the move's end then bounds how much its
+// pairs were closer at the move's start (a turn along a straight move stretches pairs, by up to
+// |w|^2 / 2 of their length) by the move's own bound: at a half, with room to spare.
+constexpr double kMaxTurn = 0.5;
 // A triangle whose height is below this share of its longest edge, or of the contact thickness
 // where that is longer, has no normal a guard could use: fans over the surface's polygons make
 // triangles of collinear points and of points a rounding apart (exactly, in the material), whose
@@ -741,6 +746,78 @@ void SurfaceContact::piece_motion(const PieceOrder& order, const Value& value, d
     r = std::max(r, item_largest_[i]);
   }
   for (double& r : out->radius) r = scale * std::sqrt(r);
+  out->turned.assign(static_cast<std::size_t>(pieces_), std::numeric_limits<double>::infinity());
+  out->turn.assign(static_cast<std::size_t>(pieces_), 0.0);
+}
+
+template <typename Value, typename Position>
+void SurfaceContact::piece_turn(const PieceOrder& order, const Value& value, const Position& position, double scale, PieceMotion* out) const {
+  // The fit: c and a the mean position and motion, (sum |y|^2 I - y y^T) w = sum y x d with
+  // y = x - c, from sums about the origin in one pass (their rounding only loosens the fit,
+  // never the bound, which the second pass measures from whatever w came out); then the largest
+  // distance of a motion from the fit. A vertex's residual is its nodes' weighted by its
+  // weights (the fit is affine), so `scale` bounds it from the nodes'.
+  turn_sums_.assign(order.items.size(), TurnSums{});
+  for_chunks(static_cast<Index>(order.items.size()), kItemsPerTask, [&](Index begin, Index end, Index) {
+    for (Index i = begin; i < end; ++i) {
+      const auto& [piece, first, last] = order.items[static_cast<std::size_t>(i)];
+      TurnSums sums;
+      order.for_each(first, last, [&](Index e) {
+        const Vec3 x = position(e), d = value(e);
+        sums.count += 1;
+        sums.squares += x.squaredNorm();
+        sums.position += x;
+        sums.motion += d;
+        sums.cross += x.cross(d);
+        sums.outer += x * x.transpose();
+      });
+      turn_sums_[static_cast<std::size_t>(i)] = sums;
+    }
+  });
+  piece_turn_sums_.assign(static_cast<std::size_t>(pieces_), TurnSums{});
+  for (std::size_t i = 0; i < order.items.size(); ++i) {
+    TurnSums& to = piece_turn_sums_[static_cast<std::size_t>(order.items[i][0])];
+    const TurnSums& from = turn_sums_[i];
+    to.count += from.count;
+    to.squares += from.squares;
+    to.position += from.position;
+    to.motion += from.motion;
+    to.cross += from.cross;
+    to.outer += from.outer;
+  }
+  turn_centre_.resize(static_cast<std::size_t>(pieces_));
+  turn_motion_.resize(static_cast<std::size_t>(pieces_));
+  turn_rate_.resize(static_cast<std::size_t>(pieces_));
+  for (std::size_t p = 0; p < piece_turn_sums_.size(); ++p) {
+    const TurnSums& sums = piece_turn_sums_[p];
+    const Vec3 c = sums.position / sums.count, a = sums.motion / sums.count;
+    const Mat3 normal = (sums.squares - sums.count * c.squaredNorm()) * Mat3::Identity() - (sums.outer - sums.count * c * c.transpose());
+    const Vec3 w = normal.ldlt().solve(sums.cross - sums.count * c.cross(a));
+    turn_centre_[p] = c;
+    turn_motion_[p] = a;
+    turn_rate_[p] = w.allFinite() ? w : Vec3::Zero();
+  }
+  item_largest_.resize(order.items.size());
+  for_chunks(static_cast<Index>(order.items.size()), kItemsPerTask, [&](Index begin, Index end, Index) {
+    for (Index i = begin; i < end; ++i) {
+      const auto& [piece, first, last] = order.items[static_cast<std::size_t>(i)];
+      const auto k = static_cast<std::size_t>(piece);
+      const Vec3 c = turn_centre_[k], a = turn_motion_[k], w = turn_rate_[k];
+      double largest = 0;
+      order.for_each(first, last, [&](Index e) { largest = std::max(largest, (value(e) - a - w.cross(position(e) - c)).squaredNorm()); });
+      item_largest_[static_cast<std::size_t>(i)] = largest;
+    }
+  });
+  out->turned.assign(static_cast<std::size_t>(pieces_), 0.0);
+  for (std::size_t i = 0; i < order.items.size(); ++i) {
+    double& r = out->turned[static_cast<std::size_t>(order.items[i][0])];
+    r = std::max(r, item_largest_[i]);
+  }
+  out->turn.resize(static_cast<std::size_t>(pieces_));
+  for (std::size_t p = 0; p < out->turned.size(); ++p) {
+    out->turned[p] = scale * std::sqrt(out->turned[p]);
+    out->turn[p] = turn_rate_[p].norm();
+  }
 }
 
 template <typename NodeMotion>
@@ -814,14 +891,26 @@ SurfaceContact::MotionCheck SurfaceContact::check_motion(const Points& at, const
       return true;
     });
   };
-  // Each end by the nodes' bound, or by the vertices where that does not hold.
+  // Each end by the nodes' bound, then with each piece's turn taken out of it (from the nodes:
+  // two passes over a few thousand), then by the vertices (keeping the nodes' turns), where those
+  // do not hold. (Turns from the vertices too were measured and not kept: two more passes over
+  // them wherever the rest failed, and on the swinging femur they saved too few lists.)
   const auto holds = [&](const Points& to, double* relative) {
+    const auto moved = [&](Index n) { return Vec3((to.row(n) - since.row(n)).transpose()); };
+    const auto again = [&]() {
+      if (relative) *relative = 0;
+      return holds_at(motion_scratch_, relative);
+    };
     node_motion(to, since, &motion_scratch_);
-    if (relative) *relative = 0;
-    if (holds_at(motion_scratch_, relative)) return true;
-    vertex_motion([&](Index n) { return Vec3((to.row(n) - since.row(n)).transpose()); }, &motion_scratch_);
-    if (relative) *relative = 0;
-    return holds_at(motion_scratch_, relative);
+    if (again()) return true;
+    piece_turn(piece_nodes_, moved, [&](Index n) { return Vec3(since.row(n).transpose()); }, weight_bound_, &motion_scratch_);
+    if (again()) return true;
+    nodes_turned_ = motion_scratch_.turned;
+    nodes_turn_ = motion_scratch_.turn;
+    vertex_motion(moved, &motion_scratch_);
+    motion_scratch_.turned.swap(nodes_turned_);
+    motion_scratch_.turn.swap(nodes_turn_);
+    return again();
   };
   MotionCheck result;
   result.holds = holds(at, &result.relative) && (!move_end || holds(*move_end, nullptr));
@@ -1173,38 +1262,71 @@ double SurfaceContact::max_step(const Points& from, const double* direction) {
   // not count (a piece falling away from another, or beside it).
   const double dhat = settings_.thickness;
   const Eigen::Map<const Points> motion(direction, from.rows(), 3);
-  vertex_motion([&](Index n) { return Vec3(motion.row(n).transpose()); }, &move_motion_);
-  const double moving = move_motion_.farthest();
-  // The largest relative motion of pieces that may meet, given their boxes at `from` or lower
-  // bounds of them (apart by `gap` less `moved`).
+  const auto moved_by = [&](Index n) { return Vec3(motion.row(n).transpose()); };
+  vertex_motion(moved_by, &move_motion_);
+  // What the list made for the move must reach beyond dhat for pieces p and q: their relative
+  // motion; within a piece whose turn was taken out (below), twice the residual r, and |w| (dhat
+  // + 2 r) more: along a straight move a turn stretches pairs apart, so a pair that comes within
+  // dhat midway lies up to that much farther at the move's end, where the list is made.
+  const auto move_relative = [&](Index p, Index q) {
+    if (p != q) return move_motion_.relative(p, q);
+    const auto i = static_cast<std::size_t>(p);
+    const double turned = move_motion_.turned[i], plain = 2 * move_motion_.radius[i];
+    return std::isfinite(turned) ? std::min(plain, 2 * turned + move_motion_.turn[i] * (dhat + 2 * turned)) : plain;
+  };
+  // The largest of those of pieces that may meet, given their boxes at `from` or lower bounds of
+  // them (apart by `gap` less the motion `since`), and the largest turn it counts.
+  double turning = 0;
   const auto largest = [&](const PieceBoxes& boxes, const PieceMotion* since) {
     double whole = 0;
-    const double moved = since ? since->farthest() : 0.0;
-    for_near_pieces(boxes, moving + moved + dhat, [&](Index p, Index q, double gap) {
-      const double relative = move_motion_.relative(p, q);
-      if (relative > whole && !(gap - (since ? since->relative(p, q) : 0.0) - relative > dhat)) whole = relative;
+    turning = 0;
+    const double reach = move_motion_.farthest() + (since ? since->farthest() : 0.0) + dhat;
+    for_near_pieces(boxes, reach, [&](Index p, Index q, double gap) {
+      const double relative = move_relative(p, q);
+      if (p != q && gap - (since ? since->relative(p, q) : 0.0) - relative > dhat) return true;
+      whole = std::max(whole, relative);
+      if (p == q && relative < 2 * move_motion_.radius[static_cast<std::size_t>(p)]) {
+        turning = std::max(turning, move_motion_.turn[static_cast<std::size_t>(p)]);
+      }
       return true;
     });
     return whole;
   };
   // One piece: its own motion. Of several, first from the boxes where the list was made and the
   // nodes' motion since (no vertex placed); where that would shorten the move, from the boxes at
-  // `from`.
-  double whole = pieces_ == 1 ? move_motion_.relative(0, 0) : 0.0;
-  if (pieces_ > 1) {
-    whole = std::numeric_limits<double>::infinity();
-    if (rho_ >= 0 && reference_nodes_.rows() == from.rows()) {
-      node_motion(from, reference_nodes_, &from_motion_);
-      whole = largest(reference_boxes_, &from_motion_);
+  // `from`. And where the move would still be shortened, with each piece's turn taken out (a
+  // piece spinning on its own had every move cut to the trust region: its ends move far against
+  // each other, though no two of its points come closer).
+  const auto whole_move = [&]() {
+    if (pieces_ == 1) {
+      const double whole = move_relative(0, 0);
+      turning = whole < 2 * move_motion_.radius[0] ? move_motion_.turn[0] : 0.0;
+      return whole;
     }
-    if (whole > 2 * kMaxSweep * dhat) {
-      piece_boxes([&](Index v) { return embedded(v, [&](Index n) { return Vec3(from.row(n).transpose()); }); }, &from_boxes_);
-      whole = largest(from_boxes_, nullptr);
+    double whole = 0;
+    if (pieces_ > 1) {
+      whole = std::numeric_limits<double>::infinity();
+      if (rho_ >= 0 && reference_nodes_.rows() == from.rows()) {
+        node_motion(from, reference_nodes_, &from_motion_);
+        whole = largest(reference_boxes_, &from_motion_);
+      }
+      if (whole > 2 * kMaxSweep * dhat) {
+        piece_boxes([&](Index v) { return embedded(v, [&](Index n) { return Vec3(from.row(n).transpose()); }); }, &from_boxes_);
+        whole = largest(from_boxes_, nullptr);
+      }
     }
+    return whole;
+  };
+  double whole = whole_move();
+  if (whole > 2 * kMaxSweep * dhat) {
+    // From the nodes (a few thousand; from the vertices it was 0.5 ms a call on the femur).
+    piece_turn(piece_nodes_, moved_by, [&](Index n) { return Vec3(from.row(n).transpose()); }, weight_bound_, &move_motion_);
+    whole = whole_move();
   }
   if (!(whole > 0)) return 1;
-  // The move considered: the direction, shortened to the trust region where it goes beyond it.
-  const double share = std::min(1.0, 2 * kMaxSweep * dhat / whole), relative = share * whole;
+  // The move considered: the direction, shortened to the trust region where it goes beyond it,
+  // and to turns of at most kMaxTurn where a turn was taken out.
+  const double share = std::min({1.0, 2 * kMaxSweep * dhat / whole, turning > 0 ? kMaxTurn / turning : 1.0}), relative = share * whole;
   node_move_ = share * motion;
   move_end_ = from + node_move_;
   cover(from, &move_end_, relative);

@@ -351,11 +351,18 @@ class SurfaceContact {
   struct PieceMotion {
     std::vector<Vec3> centre, half;  // the box's centre and half its extent
     std::vector<double> radius;
-    /// Between two pieces also the farthest corners of their boxes, where that is less (a piece
-    /// sliding along another while it sags: the two radii add up across the slide).
+    // Where measured (piece_turn; else infinite and 0): the largest distance of a motion from
+    // the least-squares fit of a translation and a turn, a + w x (x - c), and |w|. The turn moves
+    // any two points across the line between them, so it brings no two closer: two points of
+    // the piece come closer by at most twice `turned`.
+    std::vector<double> turned, turn;
+    /// How much two points, of pieces p and q, come closer: between two pieces how far they move
+    /// relative to each other (the distance of the centres and both radii, or of the farthest
+    /// corners of their boxes, where that is less: a piece sliding along another while it sags),
+    /// within one twice the radius or the turn's residual.
     double relative(Index p, Index q) const {
       const auto i = static_cast<std::size_t>(p), j = static_cast<std::size_t>(q);
-      if (p == q) return 2 * radius[i];
+      if (p == q) return 2 * std::min(radius[i], turned[i]);
       const Vec3 apart = (centre[i] - centre[j]).cwiseAbs();
       return std::min(apart.norm() + radius[i] + radius[j], (apart + half[i] + half[j]).norm());
     }
@@ -400,6 +407,10 @@ class SurfaceContact {
   /// the largest distance from the centre.
   template <typename Value>
   void piece_motion(const PieceOrder& order, const Value& value, double scale, PieceMotion* out) const;
+  /// Fills out->turned and out->turn from value(element), the motions, and position(element),
+  /// where the elements were: O(elements), two passes, in parallel.
+  template <typename Value, typename Position>
+  void piece_turn(const PieceOrder& order, const Value& value, const Position& position, double scale, PieceMotion* out) const;
   /// Per piece, the box of value(element) over its elements.
   template <typename Value>
   void item_boxes(const PieceOrder& order, const Value& value, std::vector<spatial::Aabb>* boxes) const;
@@ -567,6 +578,16 @@ class SurfaceContact {
   mutable std::vector<spatial::Aabb> item_boxes_, piece_scratch_;
   mutable std::vector<double> item_largest_;
   mutable PieceMotion motion_scratch_;
+  // piece_turn's: per item the sums of a piece's count, |x|^2, x, d, x x d and x x^T; per piece
+  // the fit's centre, translation and turn; the nodes' turns while the vertices are measured.
+  struct TurnSums {
+    double count = 0, squares = 0;
+    Vec3 position = Vec3::Zero(), motion = Vec3::Zero(), cross = Vec3::Zero();
+    Mat3 outer = Mat3::Zero();
+  };
+  mutable std::vector<TurnSums> turn_sums_, piece_turn_sums_;
+  mutable std::vector<Vec3> turn_centre_, turn_motion_, turn_rate_;
+  mutable std::vector<double> nodes_turned_, nodes_turn_;
   PieceMotion move_motion_, from_motion_;
   PieceBoxes from_boxes_;
   // The kinds of candidates proximities_ hold at y_ (Measure bits).
