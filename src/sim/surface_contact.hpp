@@ -571,6 +571,9 @@ class SurfaceContact {
   // The pieces, numbered by their first vertex, and their vertices and the nodes that carry them.
   Index pieces_ = 0;
   PieceOrder piece_vertices_, piece_nodes_;
+  // Each vertex's piece; per piece whether this step's guards hold any of its vertices.
+  std::vector<Index> vertex_piece_;
+  std::vector<std::uint8_t> piece_guarded_;
   // The pieces' boxes at reference_, and at the vertices of pairs_reference_.
   PieceBoxes reference_boxes_, pairs_boxes_;
   // Scratch of the motions, and max_step's: the move's motion, the motion since the list, the

@@ -624,7 +624,8 @@ TEST(SurfaceContact, APieceTurningOnItsOwnIsNotShortenedAndItsListHolds) {
       step.row(n) = (0.1 * axis.cross(y) - 0.1 * dhat * axis.dot(y) * axis).transpose();
       for (int k = 0; k < 3; ++k) direction[3 * static_cast<std::size_t>(n) + k] = step(n, k);
     }
-    contact.lag_guards(x);  // as a step's start has them: the slit's sides, joined, are guarded
+    // No step starts here, so no guards: a piece the guards hold keeps its turn in the trust
+    // region (see max_step), and the slit's joined sides would be.
     EXPECT_EQ(contact.max_step(x, direction.data()), 1) << "move " << move;
     for (const double share : {0.5, 1.0}) {
       const Points at = x + share * step;
@@ -816,6 +817,99 @@ TEST(SurfaceContact, APieceFallingAwayFallsAsItDoesWithoutContact) {
   EXPECT_LE((with - without).cwiseAbs().maxCoeff(), 1e-9);
   EXPECT_EQ(limited_with, 0);
 }
+
+// Two blocks closing in on each other while the upper one turns: it starts 3 thicknesses above
+// the lower, comes down by 0.7 of one a move, turning by 0.03 rad about the vertical and jostled.
+// Move after move, with lists kept where their checks allow, every pair of the two blocks within
+// the thickness at each move's middle and end is in the list (brute force). What this checks is
+// the bounds that keep lists: as two pieces (their relative motion), and joined by a tet into one
+// piece (its turn taken out of its motion, the upper half's turn and fall left in the residual).
+void close_in_while_turning(bool bridged) {
+  const double dhat = 0.01, gap = 3 * dhat;
+  const TetMesh blocks = two_blocks(gap);
+  Points rest = blocks.rest();
+  Tets tets = blocks.tets();
+  Index bridge = -1;
+  if (bridged) {
+    // A tet from an edge of the lower block's top to an edge of the upper block's bottom.
+    const auto node_at = [&](const Vec3& p) {
+      Index best = 0;
+      for (Index n = 1; n < rest.rows(); ++n) {
+        if ((rest.row(n).transpose() - p).norm() < (rest.row(best).transpose() - p).norm()) best = n;
+      }
+      return best;
+    };
+    std::array<Index, 4> t{node_at(Vec3(1.0 / 3, 1.0 / 3, 1)), node_at(Vec3(2.0 / 3, 1.0 / 3, 1)), node_at(Vec3(0.05 + 1.0 / 3, 0.02 + 1.0 / 3, 1 + gap)),
+                           node_at(Vec3(0.05 + 1.0 / 3, 0.02 + 2.0 / 3, 1 + gap))};
+    const auto corner = [&](int k) { return Vec3(rest.row(t[static_cast<std::size_t>(k)]).transpose()); };
+    if ((corner(1) - corner(0)).cross(corner(2) - corner(0)).dot(corner(3) - corner(0)) < 0) std::swap(t[0], t[1]);
+    bridge = static_cast<Index>(tets.rows());
+    tets.conservativeResize(tets.rows() + 1, 4);
+    for (int k = 0; k < 4; ++k) tets(bridge, k) = t[static_cast<std::size_t>(k)];
+  }
+  const TetMesh mesh(rest, tets);
+  Cutter cutter(mesh);
+  const CutResult result = cutter.result();
+  // The bridge meets each block at an edge: a piece of its own to the cutter (pieces share
+  // faces), one piece with both blocks to contact (copies that share nodes).
+  ASSERT_EQ(result.mesh.num_pieces(), bridged ? 3 : 2);
+  const MaterialSurface& surface = result.surface;
+  const auto& copies = cutter.tet_nodes();
+  sim::detail::SurfaceContact contact;
+  start_contact(surface, copies, mesh.rest(), mesh.rest(), dhat, &contact);
+  const TriangleSurface& s = surface.surface;
+  const Points rest_vertices = surface.positions(copies, mesh.rest());
+  // The bridge's corners and triangles touch both blocks by construction: not pairs to list.
+  std::vector<std::uint8_t> on_bridge(static_cast<std::size_t>(s.num_vertices()), 0);
+  for (Index t = 0; t < s.num_triangles(); ++t) {
+    if (surface.triangle_tet[static_cast<std::size_t>(t)] != bridge) continue;
+    for (int k = 0; k < 3; ++k) on_bridge[static_cast<std::size_t>(s.triangles(t, k))] = 1;
+  }
+  std::mt19937 random(5);
+  std::uniform_real_distribution<double> unit(-1, 1);
+  const Vec3 axis(0, 0, 1), centre(0.55, 0.52, 1.5);
+  Points x = mesh.rest();
+  int kept = 0;
+  Index near = 0;
+  for (int move = 0; move < 6; ++move) {
+    Points step = Points::Zero(x.rows(), 3);
+    std::vector<double> direction(3 * static_cast<std::size_t>(x.rows()), 0.0);
+    for (Index n = 0; n < x.rows(); ++n) {
+      if (mesh.rest()(n, 2) < 1 + gap / 2) continue;  // the lower block stays
+      const Vec3 y = x.row(n).transpose() - centre;
+      step.row(n) = (-0.7 * dhat * axis + 0.03 * axis.cross(y) + 0.05 * dhat * Vec3(unit(random), unit(random), unit(random))).transpose();
+      for (int k = 0; k < 3; ++k) direction[3 * static_cast<std::size_t>(n) + k] = step(n, k);
+    }
+    const double t = contact.max_step(x, direction.data());
+    ASSERT_GT(t, 0) << "move " << move;
+    for (const double share : {0.5 * t, t}) {
+      const Points xs = x + share * step;
+      const Index rebuilds = contact.num_rebuilds();
+      contact.for_each_active(xs, [](const auto&, double, const auto&, const auto&) {});
+      kept += contact.num_rebuilds() == rebuilds;
+      std::vector<std::array<Index, 3>> listed = contact.candidate_pairs();
+      std::sort(listed.begin(), listed.end());
+      const Points at = surface.positions(copies, xs);
+      Index missing = 0;
+      for_each_vertex_near_triangle(s, at, dhat, [&](Index v, Index tri) {
+        if (on_bridge[static_cast<std::size_t>(v)] || surface.triangle_tet[static_cast<std::size_t>(tri)] == bridge) return;
+        if ((rest_vertices(v, 2) > 1 + gap / 2) == (rest_vertices(s.triangles(tri, 0), 2) > 1 + gap / 2)) return;  // the same block
+        const collision::Proximity p = collision::point_triangle(at.row(v).transpose(), at.row(s.triangles(tri, 0)).transpose(),
+                                                                 at.row(s.triangles(tri, 1)).transpose(), at.row(s.triangles(tri, 2)).transpose());
+        if (!(p.distance < dhat)) return;
+        ++near;
+        if (!std::binary_search(listed.begin(), listed.end(), std::array<Index, 3>{0, v, tri})) ++missing;
+      });
+      EXPECT_EQ(missing, 0) << "move " << move << " at " << share;
+    }
+    x += t * step;
+  }
+  EXPECT_GT(near, 100);  // they came within the thickness
+  EXPECT_GT(kept, 0);    // and lists were kept, not only made where they were used
+}
+
+TEST(SurfaceContact, PiecesClosingInWhileTurningKeepEveryNearPairListed) { close_in_while_turning(false); }
+TEST(SurfaceContact, PartsOfAPieceClosingInWhileTurningKeepEveryNearPairListed) { close_in_while_turning(true); }
 
 // A block spinning on its own at 6 rad/s, in the real-time solver (one Newton iteration a step):
 // it spins as it does without contact, no move shortened. Before the trust region took turns
