@@ -1305,6 +1305,10 @@ double SurfaceContact::max_step(const Points& from, const double* direction) {
   // `from`. And where the move would still be shortened, with each piece's turn taken out (a
   // piece spinning on its own had every move cut to the trust region: its ends move far against
   // each other, though no two of its points come closer).
+  // (The nodes' motion since the list and the boxes at `from` do not depend on the turns: each
+  // is made once a call, where first needed.)
+  const bool listed = rho_ >= 0 && reference_nodes_.rows() == from.rows();
+  bool from_motion_made = false, from_boxes_made = false;
   const auto whole_move = [&]() {
     if (pieces_ == 1) {
       const double whole = move_relative(0, 0);
@@ -1314,12 +1318,16 @@ double SurfaceContact::max_step(const Points& from, const double* direction) {
     double whole = 0;
     if (pieces_ > 1) {
       whole = std::numeric_limits<double>::infinity();
-      if (rho_ >= 0 && reference_nodes_.rows() == from.rows()) {
-        node_motion(from, reference_nodes_, &from_motion_);
+      if (listed) {
+        if (!from_motion_made) node_motion(from, reference_nodes_, &from_motion_);
+        from_motion_made = true;
         whole = largest(reference_boxes_, &from_motion_);
       }
       if (whole > 2 * kMaxSweep * dhat) {
-        piece_boxes([&](Index v) { return embedded(v, [&](Index n) { return Vec3(from.row(n).transpose()); }); }, &from_boxes_);
+        if (!from_boxes_made) {
+          piece_boxes([&](Index v) { return embedded(v, [&](Index n) { return Vec3(from.row(n).transpose()); }); }, &from_boxes_);
+        }
+        from_boxes_made = true;
         whole = largest(from_boxes_, nullptr);
       }
     }
