@@ -95,6 +95,30 @@ void for_each_vertex_near_triangle(const TriangleSurface& s, const Points& at, d
   }
 }
 
+// The vertex-triangle pairs of two blocks (apart at rest height `split`: a vertex above it and a
+// triangle below, or the other way round) within dhat at node positions x, and how many of them
+// the contact's list does not hold; pairs with a vertex or triangle `left_out` are not looked at.
+template <typename LeftOut>
+std::pair<Index, Index> block_pairs_unlisted(const sim::detail::SurfaceContact& contact, const MaterialSurface& surface,
+                                             const std::vector<std::array<Index, 4>>& copies, const Points& rest_vertices, const Points& x,
+                                             double dhat, double split, const LeftOut& left_out) {
+  const TriangleSurface& s = surface.surface;
+  std::vector<std::array<Index, 3>> listed = contact.candidate_pairs();
+  std::sort(listed.begin(), listed.end());
+  const Points at = surface.positions(copies, x);
+  Index near = 0, missing = 0;
+  for_each_vertex_near_triangle(s, at, dhat, [&](Index v, Index t) {
+    if (left_out(v, t)) return;
+    if ((rest_vertices(v, 2) > split) == (rest_vertices(s.triangles(t, 0), 2) > split)) return;  // the same block
+    const collision::Proximity p = collision::point_triangle(at.row(v).transpose(), at.row(s.triangles(t, 0)).transpose(),
+                                                             at.row(s.triangles(t, 1)).transpose(), at.row(s.triangles(t, 2)).transpose());
+    if (!(p.distance < dhat)) return;
+    ++near;
+    if (!std::binary_search(listed.begin(), listed.end(), std::array<Index, 3>{0, v, t})) ++missing;
+  });
+  return {near, missing};
+}
+
 TEST(SurfaceContact, GradientMatchesFiniteDifferences) {
   const TetMesh mesh = two_blocks(0.05);
   Cutter cutter(mesh);
@@ -887,19 +911,11 @@ void close_in_while_turning(bool bridged) {
       const Index rebuilds = contact.num_rebuilds();
       contact.for_each_active(xs, [](const auto&, double, const auto&, const auto&) {});
       kept += contact.num_rebuilds() == rebuilds;
-      std::vector<std::array<Index, 3>> listed = contact.candidate_pairs();
-      std::sort(listed.begin(), listed.end());
-      const Points at = surface.positions(copies, xs);
-      Index missing = 0;
-      for_each_vertex_near_triangle(s, at, dhat, [&](Index v, Index tri) {
-        if (on_bridge[static_cast<std::size_t>(v)] || surface.triangle_tet[static_cast<std::size_t>(tri)] == bridge) return;
-        if ((rest_vertices(v, 2) > 1 + gap / 2) == (rest_vertices(s.triangles(tri, 0), 2) > 1 + gap / 2)) return;  // the same block
-        const collision::Proximity p = collision::point_triangle(at.row(v).transpose(), at.row(s.triangles(tri, 0)).transpose(),
-                                                                 at.row(s.triangles(tri, 1)).transpose(), at.row(s.triangles(tri, 2)).transpose());
-        if (!(p.distance < dhat)) return;
-        ++near;
-        if (!std::binary_search(listed.begin(), listed.end(), std::array<Index, 3>{0, v, tri})) ++missing;
-      });
+      const auto [found, missing] =
+          block_pairs_unlisted(contact, surface, copies, rest_vertices, xs, dhat, 1 + gap / 2, [&](Index v, Index tri) {
+            return on_bridge[static_cast<std::size_t>(v)] || surface.triangle_tet[static_cast<std::size_t>(tri)] == bridge;
+          });
+      near += found;
       EXPECT_EQ(missing, 0) << "move " << move << " at " << share;
     }
     x += t * step;
@@ -956,22 +972,10 @@ TEST(SurfaceContact, AListMadeForAMoveServesTheNextMoveTheSameWay) {
   for (Index v = 0; v < mesh.num_nodes(); ++v) {
     if (mesh.rest()(v, 2) > 1) direction[3 * v] = move(v, 0) = 1.5 * dhat;
   }
-  const TriangleSurface& s = surface.surface;
   const Points rest_vertices = surface.positions(copies, mesh.rest());
   // Every vertex-triangle pair of the two blocks within dhat at node positions x is listed.
   const auto all_near_pairs_listed = [&](const Points& x) {
-    std::vector<std::array<Index, 3>> listed = contact.candidate_pairs();
-    std::sort(listed.begin(), listed.end());
-    const Points at = surface.positions(copies, x);
-    Index near = 0, missing = 0;
-    for_each_vertex_near_triangle(s, at, dhat, [&](Index v, Index t) {
-      if ((rest_vertices(v, 2) > 1) == (rest_vertices(s.triangles(t, 0), 2) > 1)) return;  // the same block
-      const collision::Proximity p = collision::point_triangle(at.row(v).transpose(), at.row(s.triangles(t, 0)).transpose(),
-                                                               at.row(s.triangles(t, 1)).transpose(), at.row(s.triangles(t, 2)).transpose());
-      if (!(p.distance < dhat)) return;
-      ++near;
-      if (!std::binary_search(listed.begin(), listed.end(), std::array<Index, 3>{0, v, t})) ++missing;
-    });
+    const auto [near, missing] = block_pairs_unlisted(contact, surface, copies, rest_vertices, x, dhat, 1, [](Index, Index) { return false; });
     EXPECT_GT(near, 0);
     return missing == 0;
   };
