@@ -81,7 +81,8 @@
 // as it keeps the pairs' distances above 0. A vertex found behind the whole allowance at a step's
 // start, over its triangle, is guarded from where it is, its wall a hundredth of delta deeper, so
 // that the barrier pushes it back out (left unguarded, such a corner of Figure 4 sank 18
-// allowances into the other stick in four steps). A guard's g is measured from where its
+// allowances into the other stick in four steps); so is an edge found crossed into the other
+// side's material (below). A guard's g is measured from where its
 // pair lay in the material when that was behind the plane, less a millionth of the allowance, so
 // that no guard pushes at rest: where two cuts meet, a side's rim is triangulated apart from the
 // other side's faces, and some edge pairs lay up to 0.66 of the allowance behind (13 guards on
@@ -93,6 +94,11 @@
 // a face around the other edge's corners faces gets the same guard on the vector between their
 // closest points along that face's normal (its closest points held for the step), unless both
 // ends of the other edge are guarded against that plane already (g is linear along the edge).
+// Found behind the whole allowance at a step's start, such a pair is guarded from where it is
+// where the edges have crossed into the material (the closest points inside both edges, behind
+// every face around the face's edge), and left alone elsewhere (round the rim, outside): two of
+// Figure 4's sticks pivoting about a shared corner carried one's rim past the other's, 0.99
+// allowances in at one frame and 6.7 at the next, 16 at the last, with no guard.
 // A vertex guard lapses once its vertex is more than dhat from the faces it faced; in a pile,
 // where joins last, a stick that slides and turns against its neighbour carries both ends of a
 // side's edge past the neighbour's faces, and without edge guards the edge sagged through the
@@ -257,7 +263,8 @@ class SurfaceContact {
   /// and not behind it by more than the allowance, with the triangle's normal and the vertex's
   /// foot on it held for the step; and each edge-edge pair of joined copies within dhat with one
   /// edge on a face the other's faces face, unless both ends of that edge are guarded against the
-  /// plane already (see "Guards" above). O(candidates), in parallel.
+  /// plane already, and not behind it by more than the allowance unless crossed into the
+  /// material (see "Guards" above). O(candidates), in parallel.
   void lag_guards(const Points& start);
   Index num_guards() const { return static_cast<Index>(guards_.size()); }
   /// The allowance: how far behind its guard's triangle a vertex may go (a tenth of dhat).

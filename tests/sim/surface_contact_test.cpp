@@ -442,6 +442,63 @@ TEST(SurfaceContact, HalvesFoundPressedBeyondTheAllowanceArePushedBackOut) {
   EXPECT_EQ(crossings(result.surface, copies, sim), 0);
 }
 
+// Two sides of a fresh cut, the right one turned a quarter turn about the rim where the cut meets
+// the front face, so that its bottom rim (perpendicular to the cut there) now runs along the cut
+// past the left side's vertical rim: the situation of two of Figure 4's sticks at 1.2 s, pivoting
+// about a shared corner. The right side's vertices on the cut lie 0.5 allowances behind the left
+// side's cut face (guarded as usual); its bottom rim edge runs deeper, and crosses the left rim 1.8
+// allowances inside the left side, its far end outside. The edges' pair is joined (they share the
+// corner in the material) and so out of the barrier; its guard, found behind the allowance at the
+// step's start, was dropped, and nothing held it (Figure 4's rim went on to 16 allowances inside its
+// neighbour). Now it is guarded from where it is, and the sides cross no more from the first step
+// on. (Before: 9, 13 and 4 crossing pairs after the first three steps.)
+TEST(SurfaceContact, ARimFoundCrossedBeyondTheAllowanceIsPushedBackOut) {
+  const double cut_at = 0.3;
+  Cutter cutter(make_grid({Vec3(0, 0, 0), Vec3(1, 1, 1)}, {2, 2, 2}, 5));
+  cutter.cut(plane_square(Vec3(cut_at, 0.5, 0.5), Vec3(1, 0, 0), 3));
+  const CutResult result = cutter.result();
+  ASSERT_EQ(result.mesh.num_pieces(), 2);
+  const TetMesh& mesh = result.mesh.mesh;
+  sim::Simulator sim(mesh, soft(), result.mesh.material_fractions());
+  sim.set_contact_surface(result.surface);
+  const double delta = sim.surface_contact().fresh_cut_allowance;
+  ASSERT_GT(delta, 0);
+  // The right side: the piece of the tets wholly beyond the cut.
+  Index right_piece = -1;
+  for (Index t = 0; t < mesh.num_tets() && right_piece < 0; ++t) {
+    double least = 1;
+    for (int k = 0; k < 4; ++k) least = std::min(least, mesh.rest()(mesh.tets()(t, k), 0));
+    if (least > cut_at) right_piece = result.mesh.tet_piece[t];
+  }
+  ASSERT_GE(right_piece, 0);
+  // The right side turned by a quarter turn less `tilt` about the vertical through the corner
+  // (cut_at, 0, 0), so that its bottom rim runs from the corner along -y and a little towards -x;
+  // the corner then moved to (cut_at - 0.5 delta, along, lift).
+  const double tilt = 0.08, along = 0.06, lift = 0.1;
+  const double angle = -std::numbers::pi / 2 - tilt;
+  const Vec3 pivot(cut_at, 0, 0), corner(cut_at - 0.5 * delta, along, lift);
+  Points x = sim.positions();
+  for (Index t = 0; t < mesh.num_tets(); ++t) {
+    if (result.mesh.tet_piece[t] != right_piece) continue;
+    for (int k = 0; k < 4; ++k) {
+      const Index n = mesh.tets()(t, k);
+      const Vec3 d = mesh.rest().row(n).transpose() - pivot;
+      x.row(n) = (corner + Vec3(std::cos(angle) * d.x() - std::sin(angle) * d.y(), std::sin(angle) * d.x() + std::cos(angle) * d.y(), d.z()))
+                     .transpose();
+    }
+  }
+  sim.set_positions(x);
+  const auto& copies = cutter.tet_nodes();
+  ASSERT_GT(crossings(result.surface, copies, sim), 0);
+  sim::StepOptions options;
+  options.dt = 0.01;
+  options.gravity = Vec3::Zero();
+  for (int step = 0; step < 10; ++step) {
+    EXPECT_TRUE(sim.step(options).converged) << "step " << step;
+    EXPECT_EQ(crossings(result.surface, copies, sim), 0) << "step " << step;
+  }
+}
+
 // A tube-shaped crack inside a block (a cylinder's side, wholly in the material, so that no rim
 // meets the outer surface): where a side's polygons are fanned into slivers, a vertex lies within
 // the thickness of triangles of the other side that it does not touch. Those pairs lie on the two
