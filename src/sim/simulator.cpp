@@ -151,23 +151,30 @@ void Simulator::add_obstacle(const Obstacle& obstacle) {
   state_->obstacles.push_back(obstacle);
 }
 
+// Every surface vertex is a contact point (43k on the sliced hand): found in parallel over fixed
+// chunks, in the points' and obstacles' order, as one pass found them.
 void SimulatorState::lag_obstacle_friction() {
   obstacle_friction.clear();
-  for (const EmbeddedPoint& point : contact_points) {
-    ObstacleFriction f;
-    f.nodes = elements[static_cast<std::size_t>(point.tet)].nodes;
-    f.weights = point.weights;
-    f.start = Vec3::Zero();
-    for (int k = 0; k < 4; ++k) f.start += f.weights[k] * start.row(f.nodes[k]).transpose();
-    for (const Obstacle& obstacle : obstacles) {
-      if (!(obstacle.friction > 0)) continue;
-      const double d = obstacle.distance(f.start, &f.normal);
-      if (d >= 0) continue;
-      f.normal_force = -contact_stiffness * d;
-      f.mu = obstacle.friction;
-      obstacle_friction.push_back(f);
-    }
-  }
+  if (std::none_of(obstacles.begin(), obstacles.end(), [](const Obstacle& o) { return o.friction > 0; })) return;
+  detail::append_chunks(static_cast<Index>(contact_points.size()), detail::kNodeChunk, &obstacle_friction,
+                        [&](Index begin, Index end, std::vector<ObstacleFriction>* out) {
+                          for (Index p = begin; p < end; ++p) {
+                            const EmbeddedPoint& point = contact_points[static_cast<std::size_t>(p)];
+                            ObstacleFriction f;
+                            f.nodes = elements[static_cast<std::size_t>(point.tet)].nodes;
+                            f.weights = point.weights;
+                            f.start = Vec3::Zero();
+                            for (int k = 0; k < 4; ++k) f.start += f.weights[k] * start.row(f.nodes[k]).transpose();
+                            for (const Obstacle& obstacle : obstacles) {
+                              if (!(obstacle.friction > 0)) continue;
+                              const double d = obstacle.distance(f.start, &f.normal);
+                              if (d >= 0) continue;
+                              f.normal_force = -contact_stiffness * d;
+                              f.mu = obstacle.friction;
+                              out->push_back(f);
+                            }
+                          }
+                        });
 }
 void Simulator::set_contact_stiffness(double stiffness) {
   if (!(stiffness >= 0) || !std::isfinite(stiffness)) throw Error(ErrorKind::kInvalidArgument, "contact stiffness must not be negative");
