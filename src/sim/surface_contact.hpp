@@ -74,7 +74,7 @@
 // vertex on the rim slips past the edge of the triangles it lay on) held for the step, so that g
 // is linear in the nodes and the term is exact with a positive semi-definite Hessian. Its zero
 // is the fresh cut itself (g = 0), and the allowance delta = dhat / 10 is how far one side may be
-// pressed into the other. The barrier's wall stands at 0.9 delta (the rest is room for the
+// pressed into the other. The barrier's wall stands at 0.75 delta (the rest is room for the
 // triangle's turn within the step, which carries its own plane past the one held: corners pressed
 // to the wall at the bottom of Figure 4's pile were 1.0003 delta behind their triangles at the
 // step's end); conservative advancement keeps every guard's g above the wall in the line search,
@@ -531,7 +531,7 @@ class SurfaceContact {
     std::array<double, 4> w;
     Vec3 normal;
     double zero;  // where the barrier starts: the pair's g in the material if behind, less the slack
-    // How far behind its zero the barrier's wall stands: 0.9 of the allowance, or a little deeper
+    // How far behind its zero the barrier's wall stands: 0.75 of the allowance, or a little deeper
     // than a pair found behind that at the step's start (see lag_guards).
     double wall;
     // An edge guard's r and distance at the step's start (its lagged friction's normal and
