@@ -189,6 +189,8 @@ void bind_sim(py::module_& root) {
              d["guards"] = c.guards;
              d["fresh_cut_allowance"] = c.fresh_cut_allowance;
              d["guarded_reach"] = c.guarded_reach;
+             d["seconds"] = py::dict(py::arg("rebuild") = c.rebuild_seconds, py::arg("ccd") = c.ccd_seconds, py::arg("active") = c.active_seconds,
+                                     py::arg("guards") = c.guard_seconds, py::arg("joins") = c.join_seconds);
              return d;
            }, "What surface contact works with (a dict).")
       .def("surface_contact_energy", &Simulator::surface_contact_energy, "The surface contact energy now (J; inf if two parts touch).")

@@ -229,6 +229,12 @@ Simulator::SurfaceContactState Simulator::surface_contact() const {
   out.guarded_reach = c.enabled() ? c.guarded_reach() : 0.0;
   out.rebuilds = c.num_rebuilds();
   out.copy_pair_rebuilds = c.num_pair_rebuilds();
+  const detail::SurfaceContact::PartSeconds& seconds = c.part_seconds();
+  out.rebuild_seconds = seconds.rebuild;
+  out.ccd_seconds = seconds.ccd;
+  out.active_seconds = seconds.active;
+  out.guard_seconds = seconds.guards;
+  out.join_seconds = seconds.joins;
   return out;
 }
 

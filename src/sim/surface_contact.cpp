@@ -5,6 +5,7 @@
 #include "sim/surface_contact.hpp"
 
 #include "sim/block_sparse.hpp"
+#include "util/stopwatch.hpp"
 
 #include <tbb/enumerable_thread_specific.h>
 
@@ -68,6 +69,22 @@ constexpr double kRecoverShare = 0.01;
 // How far behind its zero a guard's wall stands, for a pair at g (from the zero) at the step's
 // start: kGuardWall of the allowance delta, or kRecoverShare of it deeper than the pair.
 double guard_wall(double g, double delta) { return std::max(kGuardWall * delta, -g + kRecoverShare * delta); }
+
+// Adds a scope's wall time to *total, less what *rebuild (the rebuilds' total) grew by within it:
+// the rebuilds a part sets off are counted apart.
+class PartTimer {
+ public:
+  PartTimer(double* total, const double* rebuild) : total_(total), rebuild_(rebuild), rebuild_start_(rebuild ? *rebuild : 0.0) {}
+  PartTimer(const PartTimer&) = delete;
+  PartTimer& operator=(const PartTimer&) = delete;
+  ~PartTimer() { *total_ += seconds_since(start_) - (rebuild_ ? *rebuild_ - rebuild_start_ : 0.0); }
+
+ private:
+  double* total_;
+  const double* rebuild_;
+  double rebuild_start_;
+  Clock::time_point start_ = Clock::now();
+};
 
 // The unit normal of triangle (a, b, c), or zero where it is flat for a scale of `length`.
 Vec3 unit_normal(const Vec3& a, const Vec3& b, const Vec3& c, double length) {
@@ -573,6 +590,7 @@ void SurfaceContact::guard_term(const Guard& guard, ContactTerm* t) const {
 }
 
 void SurfaceContact::collect_active(const Points& at) {
+  const PartTimer timer(&part_seconds_.active, &part_seconds_.rebuild);
   cover(at, nullptr, 0);
   if (active_current_ && active_at_.rows() == at.rows() && active_at_ == at) return;
   measure(kCounted);
@@ -985,6 +1003,7 @@ void SurfaceContact::cover(const Points& at, const Points* move_end, double move
 }
 
 void SurfaceContact::rebuild(double rho, bool made_now) {
+  const PartTimer timer(&part_seconds_.rebuild, nullptr);
   rho_ = rho;
   forget_measures();
   ++rebuilds_;
@@ -1261,6 +1280,7 @@ void SurfaceContact::clear_sutures() {
 
 double SurfaceContact::max_step(const Points& from, const double* direction) {
   if (!enabled()) return 1;
+  const PartTimer timer(&part_seconds_.ccd, &part_seconds_.rebuild);
   // How far parts of the surface that may meet move relative to each other over the whole step,
   // piece by piece (see PieceMotion): two pieces whose boxes where the move starts lie
   // apart by more than their relative motion over all of it and dhat cannot meet in it, and do
@@ -1439,6 +1459,7 @@ double SurfaceContact::guard_zero(const std::array<Index, 4>& corner, const std:
 }
 
 void SurfaceContact::lag_guards(const Points& start) {
+  const PartTimer timer(&part_seconds_.guards, &part_seconds_.rebuild);
   guards_.clear();
   piece_guarded_.assign(static_cast<std::size_t>(pieces_), 0);
   active_current_ = false;
@@ -1598,6 +1619,7 @@ void SurfaceContact::lag_guards(const Points& start) {
 
 void SurfaceContact::update_joins(const Points& at) {
   if (!enabled() || joins_.empty()) return;
+  const PartTimer timer(&part_seconds_.joins, &part_seconds_.rebuild);
   cover(at, nullptr, 0);
   // Every pair of joined copies is measured: the next step's guards, which start here, look at
   // them all. A join touches while any of its pairs (vertex-triangle or edges) is within dhat.

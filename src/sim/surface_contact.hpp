@@ -296,6 +296,14 @@ class SurfaceContact {
   Index num_rebuilds() const { return rebuilds_; }
   /// How often the pairs of copies under the candidates were found again (see copy_pairs_).
   Index num_pair_rebuilds() const { return pair_rebuilds_; }
+  /// Wall seconds spent so far in each part (for benchmarks): rebuilding the candidates, and,
+  /// apart from the rebuilds they set off, conservative advancement (max_step), the active
+  /// terms (collect_active, measuring the pairs included), the guards at a step's start and the
+  /// joins at its end.
+  struct PartSeconds {
+    double rebuild = 0, ccd = 0, active = 0, guards = 0, joins = 0;
+  };
+  const PartSeconds& part_seconds() const { return part_seconds_; }
   /// Mean edge length of the surface (the defaults are derived from it).
   double mean_edge_length() const { return mean_edge_; }
 
@@ -629,6 +637,7 @@ class SurfaceContact {
   spatial::BoxTree copy_tree_;
   bool tree_built_ = false;
   Index rebuilds_ = 0, pair_rebuilds_ = 0;
+  PartSeconds part_seconds_;
 };
 
 template <typename Visit>

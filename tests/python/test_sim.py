@@ -318,6 +318,10 @@ def test_surface_contact_keeps_a_falling_block_on_another():
         sim.add_obstacle(tetcut.sim.Obstacle.plane([0, 0, -0.1], [0, 0, 1]))
         for _ in range(100):
             report = sim.step(tetcut.sim.StepOptions(dt=0.01))
+        if contact:
+            seconds = sim.surface_contact()["seconds"]
+            assert set(seconds) == {"rebuild", "ccd", "active", "guards", "joins"}
+            assert seconds["rebuild"] > 0 and seconds["active"] > 0
         upper = V[:, 2] > 1.05
         return sim.positions[upper, 2].min(), report
 
