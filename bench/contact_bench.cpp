@@ -4,10 +4,10 @@
 // a rebuild of the candidates, which the median may not), the surface's size, the contact pairs
 // and the time in continuous collision detection, and where a step's time goes, contact's own
 // parts too. Default: examples/live-femur.json (the CT femur from libcgal-demo embedded in an
-// 11k-tet lattice, hanging under gravity, the real-time solver: nothing comes near). With contact at work:
-// bench/scenes/hand-sliced.json (libcgal-demo's hand in an 11k-tet lattice, 43k surface
-// triangles, cut by a slanted plane; the upper part slides down the cut, thousands of pairs
-// within the thickness).
+// 11k-tet lattice, hanging under gravity, the real-time solver: nothing comes near). With
+// contact at work: bench/scenes/hand-sliced.json (libcgal-demo's hand in an 11k-tet lattice, 43k
+// surface triangles, cut by a slanted plane; the upper part slides down the cut, thousands of
+// pairs within the thickness).
 //
 // Usage: tetcut_bench_contact [SCENE] [STEPS]
 
