@@ -222,7 +222,7 @@ void SurfaceContact::clear_surface() {
   copy_nodes_.clear();
   pieces_ = 0;
   vertex_piece_.clear();
-  piece_guarded_.clear();
+  guard_pieces_.clear();
   piece_vertices_ = {};
   piece_nodes_ = {};
   candidates_.clear();
@@ -793,6 +793,7 @@ void SurfaceContact::piece_turn(const PieceOrder& order, const Value& value, con
         sums.motion += d;
         sums.cross += x.cross(d);
         sums.outer += x * x.transpose();
+        sums.around.extend(x);
       });
       turn_sums_[static_cast<std::size_t>(i)] = sums;
     }
@@ -807,10 +808,15 @@ void SurfaceContact::piece_turn(const PieceOrder& order, const Value& value, con
     to.motion += from.motion;
     to.cross += from.cross;
     to.outer += from.outer;
+    to.around.extend(from.around);
   }
   turn_centre_.resize(static_cast<std::size_t>(pieces_));
   turn_motion_.resize(static_cast<std::size_t>(pieces_));
   turn_rate_.resize(static_cast<std::size_t>(pieces_));
+  out->origin.resize(static_cast<std::size_t>(pieces_));
+  out->rate.resize(static_cast<std::size_t>(pieces_));
+  out->around.resize(static_cast<std::size_t>(pieces_));
+  out->weight_bound = scale;
   for (std::size_t p = 0; p < piece_turn_sums_.size(); ++p) {
     const TurnSums& sums = piece_turn_sums_[p];
     const Vec3 c = sums.position / sums.count, a = sums.motion / sums.count;
@@ -819,6 +825,9 @@ void SurfaceContact::piece_turn(const PieceOrder& order, const Value& value, con
     turn_centre_[p] = c;
     turn_motion_[p] = a;
     turn_rate_[p] = w.allFinite() ? w : Vec3::Zero();
+    out->rate[p] = turn_rate_[p];
+    out->origin[p] = a - turn_rate_[p].cross(c);
+    out->around[p] = sums.around;
   }
   item_largest_.resize(order.items.size());
   for_chunks(static_cast<Index>(order.items.size()), kItemsPerTask, [&](Index begin, Index end, Index) {
@@ -885,6 +894,22 @@ bool SurfaceContact::for_near_pieces(const PieceBoxes& boxes, double within, con
     }
   }
   return true;
+}
+
+SurfaceContact::PieceMotion::Fitted SurfaceContact::PieceMotion::fitted(std::size_t i, std::size_t j) const {
+  const Vec3 o = origin[i] - origin[j], w = rate[i] - rate[j];
+  const auto largest = [&](const spatial::Aabb& box) {
+    double most = 0;
+    for (int k = 0; k < 8; ++k) {
+      const Vec3 x((k & 1 ? box.max : box.min).x(), (k & 2 ? box.max : box.min).y(), (k & 4 ? box.max : box.min).z());
+      most = std::max(most, (o + w.cross(x)).squaredNorm());
+    }
+    return weight_bound * std::sqrt(most);
+  };
+  // Over p's box with q's turn, or over q's with p's: the smaller.
+  const double over_i = largest(around[i]), over_j = largest(around[j]);
+  const double residuals = turned[i] + turned[j];
+  return over_i <= over_j ? Fitted{over_i + residuals, rate[j].norm()} : Fitted{over_j + residuals, rate[i].norm()};
 }
 
 double SurfaceContact::PieceMotion::farthest() const {
@@ -1293,16 +1318,49 @@ double SurfaceContact::max_step(const Points& from, const double* direction) {
   // motion; within a piece whose turn was taken out (below), twice the residual r, and |w| (dhat
   // + 2 r) more: along a straight move a turn stretches pairs apart, so a pair that comes within
   // dhat midway lies up to that much farther at the move's end, where the list is made.
+  // Between two pieces whose turns were fitted, what the list must reach is how far a pair that
+  // comes within dhat moves relative to itself (PieceMotion::fitted), and the move's turn is
+  // bounded by kMaxTurn as a piece's own (the list made at its end also bounds how much its pairs
+  // closed since its start: see kMaxTurn).
   const auto move_relative = [&](Index p, Index q) {
-    if (p != q) return move_motion_.relative(p, q);
+    if (p != q) {
+      const auto i = static_cast<std::size_t>(p), j = static_cast<std::size_t>(q);
+      const double plain = move_motion_.moved_apart(i, j);
+      if (!move_motion_.fits(i, j)) return plain;
+      const PieceMotion::Fitted fit = move_motion_.fitted(i, j);
+      return std::min(plain, fit.closing + fit.turn * (dhat + fit.closing));
+    }
     const auto i = static_cast<std::size_t>(p);
-    // Not for pieces the guards hold: a guard keeps its plane from the step's start, and its
-    // wall leaves room for a face's turn within a step as small as the trust region allows when
-    // the turn counts (Figure 4's pile crossed in 4 pairs of two sticks' cut sides from 1.2 s
-    // when their turns were taken out too).
-    if (i < piece_guarded_.size() && piece_guarded_[i]) return 2 * move_motion_.radius[i];
     const double turned = move_motion_.turned[i], plain = 2 * move_motion_.radius[i];
     return std::isfinite(turned) ? std::min(plain, 2 * turned + move_motion_.turn[i] * (dhat + 2 * turned)) : plain;
+  };
+  // Where the guards hold parts of the surface, how far the move may go for them: a guard keeps
+  // its triangle's plane from the step's start, and a face that turns by theta within the step
+  // carries its own plane past the held one, where the guard's pair has slid by s along it, by
+  // up to theta s (a turn the two share moves the vector between them with the plane: to first
+  // order nothing). The room for that is the allowance less the guards' wall (kGuardWall). Until
+  // the turns were fitted, a guarded piece counted its whole motion in the trust region (twice
+  // its radius, at most 4 dhat a move), so that a piece of extent L turned by at most 4 dhat / L
+  // while its pairs slid by at most 4 dhat: theta s <= 16 dhat^2 / L. That product is kept, per
+  // pair of pieces the guards join, with both pieces' turns and the pair's relative motion in use
+  // (move_relative); where the whole motion allowed a longer move, that longer move. So the
+  // halves of a cut block spinning together, whose pairs barely slide, turn as they do without
+  // contact; a guarded pair sliding fast turns no further than before. O(guarded pairs).
+  const auto guarded_share = [&]() {
+    double share = std::numeric_limits<double>::infinity(), whole_share = std::numeric_limits<double>::infinity();
+    for (const auto& [p, q] : guard_pieces_) {
+      const auto i = static_cast<std::size_t>(p), j = static_cast<std::size_t>(q);
+      for (const std::size_t k : {i, j}) whole_share = std::min(whole_share, 2 * kMaxSweep * dhat / (2 * move_motion_.radius[k]));
+      if (!move_motion_.fits(i, j)) {
+        share = 0;
+        continue;
+      }
+      const double theta = std::max(move_motion_.turn[i], move_motion_.turn[j]), slide = move_relative(p, q);
+      const double extent = std::max((move_motion_.around[i].max - move_motion_.around[i].min).norm(),
+                                     (move_motion_.around[j].max - move_motion_.around[j].min).norm());
+      if (theta * slide > 0) share = std::min(share, std::sqrt(4 * kMaxSweep * kMaxSweep * dhat * dhat / extent / (theta * slide)));
+    }
+    return std::max(share, whole_share);
   };
   // The largest of those of pieces that may meet, given their boxes at `from` or lower bounds of
   // them (apart by `gap` less the motion `since`), and the largest turn it counts.
@@ -1315,9 +1373,9 @@ double SurfaceContact::max_step(const Points& from, const double* direction) {
       const double relative = move_relative(p, q);
       if (p != q && gap - (since ? since->relative(p, q) : 0.0) - relative > dhat) return true;
       whole = std::max(whole, relative);
-      if (p == q && relative < 2 * move_motion_.radius[static_cast<std::size_t>(p)]) {
-        turning = std::max(turning, move_motion_.turn[static_cast<std::size_t>(p)]);
-      }
+      const auto i = static_cast<std::size_t>(p), j = static_cast<std::size_t>(q);
+      if (p == q && relative < 2 * move_motion_.radius[i]) turning = std::max(turning, move_motion_.turn[i]);
+      if (p != q && relative < move_motion_.moved_apart(i, j)) turning = std::max({turning, move_motion_.turn[i], move_motion_.turn[j]});
       return true;
     });
     return whole;
@@ -1364,7 +1422,8 @@ double SurfaceContact::max_step(const Points& from, const double* direction) {
   if (!(whole > 0)) return 1;
   // The move considered: the direction, shortened to the trust region where it goes beyond it,
   // and to turns of at most kMaxTurn where a turn was taken out.
-  const double share = std::min({1.0, 2 * kMaxSweep * dhat / whole, turning > 0 ? kMaxTurn / turning : 1.0}), relative = share * whole;
+  const double share = std::min({1.0, 2 * kMaxSweep * dhat / whole, turning > 0 ? kMaxTurn / turning : 1.0, guarded_share()});
+  const double relative = share * whole;
   node_move_ = share * motion;
   move_end_ = from + node_move_;
   cover(from, &move_end_, relative);
@@ -1461,7 +1520,7 @@ double SurfaceContact::guard_zero(const std::array<Index, 4>& corner, const std:
 void SurfaceContact::lag_guards(const Points& start) {
   const PartTimer timer(&part_seconds_.guards, &part_seconds_.rebuild);
   guards_.clear();
-  piece_guarded_.assign(static_cast<std::size_t>(pieces_), 0);
+  guard_pieces_.clear();
   active_current_ = false;
   if (!enabled() || (joins_.empty() && group_facing_.empty())) return;
   cover(start, nullptr, 0);
@@ -1611,10 +1670,15 @@ void SurfaceContact::lag_guards(const Points& start) {
       }
     }
   });
-  // The pieces whose surface the guards hold: max_step keeps their whole motion (see there).
+  // The pairs of pieces the guards join (a piece with itself where a cut runs within it): max_step
+  // bounds their turns within a move (see there).
   for (const Guard& guard : guards_) {
-    for (const Index v : guard.corner) piece_guarded_[static_cast<std::size_t>(vertex_piece_[static_cast<std::size_t>(v)])] = 1;
+    const Index p = vertex_piece_[static_cast<std::size_t>(guard.corner[0])], q = vertex_piece_[static_cast<std::size_t>(guard.corner[2])];
+    const std::array<Index, 2> pieces{std::min(p, q), std::max(p, q)};
+    if (guard_pieces_.empty() || guard_pieces_.back() != pieces) guard_pieces_.push_back(pieces);  // mostly runs of one pair
   }
+  std::sort(guard_pieces_.begin(), guard_pieces_.end());
+  guard_pieces_.erase(std::unique(guard_pieces_.begin(), guard_pieces_.end()), guard_pieces_.end());
 }
 
 void SurfaceContact::update_joins(const Points& at) {

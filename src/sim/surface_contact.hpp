@@ -371,16 +371,43 @@ class SurfaceContact {
     // any two points across the line between them, so it brings no two closer: two points of
     // the piece come closer by at most twice `turned`.
     std::vector<double> turned, turn;
+    // Where turned is finite: the fit as origin + rate x x, the box of the points it was made
+    // about (the nodes), and a bound on a vertex's sum of |weights| over its nodes (the fit is
+    // affine, so a vertex's fitted motion is its nodes' weighted by its weights).
+    std::vector<Vec3> origin, rate;
+    std::vector<spatial::Aabb> around;
+    double weight_bound = 1;
     /// How much two points, of pieces p and q, come closer: between two pieces how far they move
     /// relative to each other (the distance of the centres and both radii, or of the farthest
     /// corners of their boxes, where that is less: a piece sliding along another while it sags),
-    /// within one twice the radius or the turn's residual.
+    /// or, where both turns were fitted, fitted(p, q).closing where less; within one twice the
+    /// radius or the turn's residual.
     double relative(Index p, Index q) const {
       const auto i = static_cast<std::size_t>(p), j = static_cast<std::size_t>(q);
       if (p == q) return 2 * std::min(radius[i], turned[i]);
+      const double plain = moved_apart(i, j);
+      return fits(i, j) ? std::min(plain, fitted(i, j).closing) : plain;
+    }
+    /// How far any point of piece i moves relative to any of piece j != i, from the boxes.
+    double moved_apart(std::size_t i, std::size_t j) const {
       const Vec3 apart = (centre[i] - centre[j]).cwiseAbs();
       return std::min(apart.norm() + radius[i] + radius[j], (apart + half[i] + half[j]).norm());
     }
+    bool fits(std::size_t i, std::size_t j) const { return std::isfinite(turned[i]) && std::isfinite(turned[j]); }
+    /// From the two fits, for points x of p and y of q: their relative motion is
+    /// F(x) + w_q x (x - y) + the residuals, F(x) = (o_p - o_q) + (w_p - w_q) x x (or the same
+    /// with the pieces' roles swapped). The turn w_q moves x - y across itself, so it brings the
+    /// two no closer: they close by at most |F| + both residuals (`closing`), |F| bounded over
+    /// either piece's box (F is affine, so its norm is largest at a corner). Two pieces turning
+    /// together, the halves of a cut block spinning, close by their residuals alone; counted by
+    /// their whole relative motion, each Newton move was cut to the trust region. A pair that
+    /// comes within dhat of each other starts within dhat + closing, so moves relative to each
+    /// other by at most closing + |w| (dhat + closing), with w the turn of the piece whose box
+    /// was not used (`turn`; max_step's list must reach that far). O(1).
+    struct Fitted {
+      double closing, turn;
+    };
+    Fitted fitted(std::size_t i, std::size_t j) const;
     /// At least relative(p, q) for any two pieces. O(pieces).
     double farthest() const;
   };
@@ -586,9 +613,9 @@ class SurfaceContact {
   // The pieces, numbered by their first vertex, and their vertices and the nodes that carry them.
   Index pieces_ = 0;
   PieceOrder piece_vertices_, piece_nodes_;
-  // Each vertex's piece; per piece whether this step's guards hold any of its vertices.
+  // Each vertex's piece.
   std::vector<Index> vertex_piece_;
-  std::vector<std::uint8_t> piece_guarded_;
+  std::vector<std::array<Index, 2>> guard_pieces_;  // the pairs of pieces this step's guards join (lag_guards)
   // The pieces' boxes at reference_, and at the vertices of pairs_reference_.
   PieceBoxes reference_boxes_, pairs_boxes_;
   // Scratch of the motions, and max_step's: the move's motion, the motion since the list, the
@@ -602,6 +629,7 @@ class SurfaceContact {
     double count = 0, squares = 0;
     Vec3 position = Vec3::Zero(), motion = Vec3::Zero(), cross = Vec3::Zero();
     Mat3 outer = Mat3::Zero();
+    spatial::Aabb around;  // of the positions
   };
   mutable std::vector<TurnSums> turn_sums_, piece_turn_sums_;
   mutable std::vector<Vec3> turn_centre_, turn_motion_, turn_rate_;
