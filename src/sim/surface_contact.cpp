@@ -25,7 +25,7 @@ constexpr double kKeepShare = 0.1;
 // rounding of the distance computed.
 constexpr double kAdvanceShare = 0.9;
 // Conservative advancement gives up refining after this many advances and keeps the safe time
-// reached (a pair sliding along another approaches slowly; the next Newton iteration goes on).
+// reached (the next Newton iteration goes on).
 constexpr int kMaxAdvances = 64;
 // The farthest one Newton step may move the surface's parts that may meet over it from the
 // middle of their motions (relative to each other: twice this), in contact thicknesses: a longer
@@ -1465,28 +1465,54 @@ double SurfaceContact::max_step(const Points& from, const double* direction) {
       const double bound = bound_a + bound_b;
       // The gap of their boxes bounds the distance from below: beyond reach by it, beyond reach.
       if (bound > 0 && gap_between(y, c.edges) - bound > 0) continue;
-      const auto distance_at = [&](double t) {
+      const auto proximity_along = [&](double t) {
         const auto p = [&](int i) -> Vec3 { return y[i] + t * d[i]; };
-        return proximity_at({p(0), p(1), p(2), p(3)}, c.edges).distance;
+        return proximity_at({p(0), p(1), p(2), p(3)}, c.edges);
       };
       // Where the pair was measured at the move's start already (within dhat, at y_: the Newton
-      // step's evaluation there), that distance.
-      const double start = counted_measured && std::isfinite(proximities_[k].distance) ? proximities_[k].distance : distance_at(0);
+      // step's evaluation there), that.
+      collision::Proximity at = counted_measured && std::isfinite(proximities_[k].distance) ? proximities_[k] : proximity_along(0);
+      const double start = at.distance;
       if (!(bound > 0) || start - bound > 0) continue;  // cannot come within reach this step
       if (!(start > 0)) {
         t_min = 0;
         continue;
       }
+      // Conservative advancement (ACCD): from t, with the distance there, each advance covers
+      // kAdvanceShare of it over the bound (the first, 1 - kKeepShare), and stops once the
+      // distance reached would fall below kKeepShare of the start. The bound counts how fast the
+      // corners slide as well as how fast they close: a pair sliding along another a hair apart
+      // (an edge resting 5e-7 from another under the sliced hand's upper part, 3e-4 dhat, its
+      // corners sliding thousands of times that a move) advanced by a hair each time, and held
+      // each Newton move to a hundredth. So each advance goes at least as far as the two stay
+      // apart along the direction between their closest points: the first primitive's corners'
+      // least reach along it less the second's most (convex sets apart by that much along a unit
+      // vector are apart by that much at least), linear in t corner by corner, and equal to the
+      // distance where measured (the closest points' direction separates the sets there). Sliding
+      // pairs cover the move in one advance.
+      const int split = c.edges ? 2 : 1;  // the first primitive's corners, then the second's
+      const double keep = kKeepShare * start;
+      const auto apart_until = [&](const collision::Proximity& measured, double t) {
+        if (!(measured.distance > 0)) return t;
+        const Vec3 n = measured.r / measured.distance;  // from the second primitive to the first
+        double until = 1;
+        for (int i = 0; i < split; ++i) {
+          for (int j = split; j < 4; ++j) {
+            const double gap = n.dot(y[i] - y[j]), rate = n.dot(d[i] - d[j]);
+            if (rate < 0) until = std::min(until, (keep - gap) / rate);
+          }
+        }
+        return std::max(t, until);
+      };
       double t = 0, advance = (1 - kKeepShare) * start / bound;
       for (int i = 0; i < kMaxAdvances; ++i) {
-        const double d_next = distance_at(std::min(1.0, t + advance));
-        if (t > 0 && d_next < kKeepShare * start) break;
-        t += advance;
-        if (t >= 1) {
-          t = 1;
-          break;
-        }
-        advance = kAdvanceShare * d_next / bound;
+        const double next = std::min(1.0, std::max(t + advance, apart_until(at, t)));
+        const collision::Proximity reached = proximity_along(next);
+        if (t > 0 && reached.distance < keep) break;
+        t = next;
+        if (t >= 1) break;
+        at = reached;
+        advance = kAdvanceShare * reached.distance / bound;
       }
       t_min = std::min(t_min, t);
     }

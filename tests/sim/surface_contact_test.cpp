@@ -879,6 +879,33 @@ TEST(SurfaceContact, PiecesThatCannotMeetDoNotShortenAMove) {
   EXPECT_GE(t, 2 * dhat / 0.25 * (1 - 1e-12));
 }
 
+// A block sliding over another a hair apart (a thousandth of the thickness), 3 thicknesses along
+// in one move: the pairs' distances stay what they are, so the whole move is safe. Conservative
+// advancement bounds how fast a pair can close by how fast its corners slide, here 3000 times its
+// distance: cut off after its first 64 advances it allowed 2% of the move, and a pair resting
+// under a load while it slid held the sliced hand's Newton moves to a hundredth for 11 steps.
+TEST(SurfaceContact, APairSlidingAHairApartDoesNotHoldAMoveBack) {
+  const double dhat = 0.01, gap = 1e-3 * dhat;
+  const TetMesh mesh = two_blocks(gap);
+  Cutter cutter(mesh);
+  const MaterialSurface surface = cutter.surface();
+  const auto& copies = cutter.tet_nodes();
+  sim::detail::SurfaceContact contact;
+  start_contact(surface, copies, mesh.rest(), mesh.rest(), dhat, &contact);
+  std::vector<double> direction(3 * static_cast<std::size_t>(mesh.num_nodes()), 0.0);
+  for (Index v = 0; v < mesh.num_nodes(); ++v) {
+    if (mesh.rest()(v, 2) > 1 + gap / 2) direction[3 * v] = 3 * dhat;  // the upper block, along x
+  }
+  EXPECT_EQ(contact.max_step(mesh.rest(), direction.data()), 1);
+  // Pressed down as well as sliding, the pairs close: the move is stopped short of their meeting.
+  for (Index v = 0; v < mesh.num_nodes(); ++v) {
+    if (mesh.rest()(v, 2) > 1 + gap / 2) direction[3 * v + 2] = -2 * gap;
+  }
+  const double t = contact.max_step(mesh.rest(), direction.data());
+  EXPECT_GT(t, 0.4);
+  EXPECT_LT(t, 0.5);  // the gap halves by t = 0.25, and advancement keeps a tenth of it: t <= 0.45
+}
+
 // A block cut in two, its upper half held: the lower half falls away under gravity in the
 // real-time solver (one Newton iteration a step) exactly as it does without contact, no move
 // shortened. With one motion for the whole surface every move was cut to the trust region once
