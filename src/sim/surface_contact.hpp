@@ -137,8 +137,9 @@
 // of the pairs of copies, found within rho plus room for 10 dhat of motion by a self-join of a box
 // hierarchy over the copies (refitted), serves
 // several rebuilds. Motions are measured piece by piece (the mesh's connected parts), relative
-// to each other: within a piece against its own centre, between pieces that lie apart by more
-// than they moved not at all (see PieceMotion); by the nodes first (O(nodes)), by the vertices
+// to each other: within a piece against its own centre, between two by their boxes of motion or
+// by the difference of their fitted turns, between pieces that lie apart by more than they moved
+// not at all (see PieceMotion); by the nodes first (O(nodes)), by the vertices
 // where that bound is too loose (O(V)); a list kept with no candidates places no vertex. The
 // trust region (max_step) counts the same way: only pieces that may meet over the move. O(V + F + copy pairs
 // x their primitives) per rebuild, O(C log C + copy pairs) more when the pairs are found again,
@@ -240,9 +241,13 @@ class SurfaceContact {
 
   /// The largest t in (0, 1] such that moving the nodes from `from` along t * direction (3 per
   /// node) keeps every counted pair at a positive distance, with a margin: conservative
-  /// advancement stops a pair at a tenth of its starting distance. 1 when nothing comes close.
-  /// A direction moving parts of the surface more than two thicknesses relative to each other is
-  /// first shortened to that (a trust region): the candidate list covers the move considered.
+  /// advancement stops a pair at a tenth of its starting distance (each advance as far as the
+  /// bound of its corners' relative speed allows, or as the pair stays apart along the direction
+  /// between its closest points, whichever is further). 1 when nothing comes close. A direction
+  /// moving parts of the surface more than two thicknesses relative to each other (their turns
+  /// fitted and taken out where that shortens it) is first shortened to that (a trust region):
+  /// the candidate list covers the move considered. Where guards hold pieces, their turn and
+  /// slide over the move are bounded together as well (see guarded_share in max_step).
   double max_step(const Points& from, const double* direction);
 
   /// Friction of the step starting at `start`: the pairs in contact there, each with its normal
