@@ -945,7 +945,9 @@ TEST(SurfaceContact, APieceFallingAwayFallsAsItDoesWithoutContact) {
 // fitted and taken out of their relative motion, no move is shortened (each was, to the trust
 // region, when two pieces counted their whole relative motion) and the lists still hold every
 // near pair.
-void close_in_while_turning(bool bridged, bool together = false) {
+// With `against`, the lower block turns too, the other way (0.03 rad a move each), as the upper
+// closes in: both fits' turns count, and differ.
+void close_in_while_turning(bool bridged, bool together = false, bool against = false) {
   const double dhat = 0.01, gap = (together ? 0.6 : 3) * dhat;
   const TetMesh blocks = two_blocks(gap);
   Points rest = blocks.rest();
@@ -998,9 +1000,10 @@ void close_in_while_turning(bool bridged, bool together = false) {
     std::vector<double> direction(3 * static_cast<std::size_t>(x.rows()), 0.0);
     for (Index n = 0; n < x.rows(); ++n) {
       const bool upper = mesh.rest()(n, 2) > 1 + gap / 2;
-      if (!upper && !together) continue;  // the lower block stays
+      if (!upper && !together && !against) continue;  // the lower block stays
       const Vec3 y = x.row(n).transpose() - centre;
-      step.row(n) = ((upper && !together ? -0.7 * dhat : 0.0) * axis + turn * axis.cross(y) + 0.05 * dhat * Vec3(unit(random), unit(random), unit(random))).transpose();
+      const double own_turn = !upper && against ? -turn : turn;
+      step.row(n) = ((upper && !together ? -0.7 * dhat : 0.0) * axis + own_turn * axis.cross(y) + 0.05 * dhat * Vec3(unit(random), unit(random), unit(random))).transpose();
       for (int k = 0; k < 3; ++k) direction[3 * static_cast<std::size_t>(n) + k] = step(n, k);
     }
     const double t = contact.max_step(x, direction.data());
@@ -1030,6 +1033,7 @@ void close_in_while_turning(bool bridged, bool together = false) {
 TEST(SurfaceContact, PiecesClosingInWhileTurningKeepEveryNearPairListed) { close_in_while_turning(false); }
 TEST(SurfaceContact, PartsOfAPieceClosingInWhileTurningKeepEveryNearPairListed) { close_in_while_turning(true); }
 TEST(SurfaceContact, PiecesTurningTogetherAreNotShortenedAndKeepEveryNearPairListed) { close_in_while_turning(false, true); }
+TEST(SurfaceContact, PiecesClosingInWhileTurningAgainstEachOtherKeepEveryNearPairListed) { close_in_while_turning(false, false, true); }
 
 // A block spinning on its own at 6 rad/s, in the real-time solver (one Newton iteration a step):
 // it spins as it does without contact, no move shortened. Before the trust region took turns
