@@ -64,6 +64,28 @@ void start_contact(const MaterialSurface& surface, const std::vector<std::array<
   contact->set_surface(surface, copies, rest, x, changed, options, soft().youngs_modulus);
 }
 
+// Two blocks (two_blocks(gap)) with contact of thickness dhat started at rest, and moves of the
+// upper block alone.
+struct BlocksInContact {
+  TetMesh mesh;
+  Cutter cutter;
+  MaterialSurface surface;
+  sim::detail::SurfaceContact contact;
+  double gap;
+  BlocksInContact(double gap_between, double dhat) : mesh(two_blocks(gap_between)), cutter(mesh), surface(cutter.surface()), gap(gap_between) {
+    start_contact(surface, cutter.tet_nodes(), mesh.rest(), mesh.rest(), dhat, &contact);
+  }
+  /// Each node of the upper block moved by `motion`, the lower block's not (row-major: its data()
+  /// is a direction for max_step).
+  Points upper_moved_by(const Vec3& motion) const {
+    Points move = Points::Zero(mesh.num_nodes(), 3);
+    for (Index v = 0; v < mesh.num_nodes(); ++v) {
+      if (mesh.rest()(v, 2) > 1 + gap / 2) move.row(v) = motion.transpose();
+    }
+    return move;
+  }
+};
+
 // Figure 8's slinky carved out of a coarse block: its coils (0.42 apart) are thinner than a tet
 // (0.5), so that a copy of one coil shares nodes with copies of the next.
 Cutter coarse_slinky() {
@@ -829,17 +851,11 @@ TEST(SurfaceContact, PairsOfNeighbouringCopiesAcrossACutCountWhereTheyLayApart) 
 // covers that move only. Covering the whole move listed every pair of the two blocks, and on
 // Figure 4's pile ran out of memory.
 TEST(SurfaceContact, AWildDirectionIsShortenedToTheTrustRegion) {
-  const TetMesh mesh = two_blocks(0.3);
-  Cutter cutter(mesh);
-  const MaterialSurface surface = cutter.surface();
-  const auto& copies = cutter.tet_nodes();
   const double dhat = 0.01;
-  sim::detail::SurfaceContact contact;
-  start_contact(surface, copies, mesh.rest(), mesh.rest(), dhat, &contact);
-  std::vector<double> direction(3 * static_cast<std::size_t>(mesh.num_nodes()), 0.0);
-  for (Index v = 0; v < mesh.num_nodes(); ++v) {
-    if (mesh.rest()(v, 2) > 1.1) direction[3 * v + 2] = 40;  // the upper block, straight up
-  }
+  BlocksInContact blocks(0.3, dhat);
+  const TetMesh& mesh = blocks.mesh;
+  sim::detail::SurfaceContact& contact = blocks.contact;
+  Points direction = blocks.upper_moved_by(Vec3(0, 0, 40));  // straight up
   const double t = contact.max_step(mesh.rest(), direction.data());
   // Two thicknesses of 40 m (relative to the motions' middle: 20 m each way).
   EXPECT_GT(t, 0);
@@ -847,7 +863,7 @@ TEST(SurfaceContact, AWildDirectionIsShortenedToTheTrustRegion) {
   EXPECT_GE(t, 2 * dhat / 20 * (1 - 1e-12));
   EXPECT_EQ(contact.num_candidates(), 0);  // the blocks are 0.3 apart: no pair within the move
   // A short direction is taken whole.
-  for (double& d : direction) d *= 1e-4;
+  direction *= 1e-4;
   EXPECT_EQ(contact.max_step(mesh.rest(), direction.data()), 1);
 }
 
@@ -856,20 +872,11 @@ TEST(SurfaceContact, AWildDirectionIsShortenedToTheTrustRegion) {
 // one motion for the whole surface: a block moving 0.2 towards another 0.3 away was cut to a
 // fifth of its move).
 TEST(SurfaceContact, PiecesThatCannotMeetDoNotShortenAMove) {
-  const TetMesh mesh = two_blocks(0.3);
-  Cutter cutter(mesh);
-  const MaterialSurface surface = cutter.surface();
-  const auto& copies = cutter.tet_nodes();
   const double dhat = 0.01;
-  sim::detail::SurfaceContact contact;
-  start_contact(surface, copies, mesh.rest(), mesh.rest(), dhat, &contact);
-  const auto towards = [&](double distance) {
-    std::vector<double> direction(3 * static_cast<std::size_t>(mesh.num_nodes()), 0.0);
-    for (Index v = 0; v < mesh.num_nodes(); ++v) {
-      if (mesh.rest()(v, 2) > 1.1) direction[3 * v + 2] = -distance;  // the upper block, straight down
-    }
-    return direction;
-  };
+  BlocksInContact blocks(0.3, dhat);
+  const TetMesh& mesh = blocks.mesh;
+  sim::detail::SurfaceContact& contact = blocks.contact;
+  const auto towards = [&](double distance) { return blocks.upper_moved_by(Vec3(0, 0, -distance)); };  // straight down
   EXPECT_EQ(contact.max_step(mesh.rest(), towards(0.2).data()), 1);
   EXPECT_EQ(contact.max_step(mesh.rest(), towards(0.28).data()), 1);
   EXPECT_EQ(contact.num_candidates(), 0);
@@ -886,22 +893,12 @@ TEST(SurfaceContact, PiecesThatCannotMeetDoNotShortenAMove) {
 // under a load while it slid held the sliced hand's Newton moves to a hundredth for 11 steps.
 TEST(SurfaceContact, APairSlidingAHairApartDoesNotHoldAMoveBack) {
   const double dhat = 0.01, gap = 1e-3 * dhat;
-  const TetMesh mesh = two_blocks(gap);
-  Cutter cutter(mesh);
-  const MaterialSurface surface = cutter.surface();
-  const auto& copies = cutter.tet_nodes();
-  sim::detail::SurfaceContact contact;
-  start_contact(surface, copies, mesh.rest(), mesh.rest(), dhat, &contact);
-  std::vector<double> direction(3 * static_cast<std::size_t>(mesh.num_nodes()), 0.0);
-  for (Index v = 0; v < mesh.num_nodes(); ++v) {
-    if (mesh.rest()(v, 2) > 1 + gap / 2) direction[3 * v] = 3 * dhat;  // the upper block, along x
-  }
-  EXPECT_EQ(contact.max_step(mesh.rest(), direction.data()), 1);
+  BlocksInContact blocks(gap, dhat);
+  const TetMesh& mesh = blocks.mesh;
+  sim::detail::SurfaceContact& contact = blocks.contact;
+  EXPECT_EQ(contact.max_step(mesh.rest(), blocks.upper_moved_by(Vec3(3 * dhat, 0, 0)).data()), 1);  // along x
   // Pressed down as well as sliding, the pairs close: the move is stopped short of their meeting.
-  for (Index v = 0; v < mesh.num_nodes(); ++v) {
-    if (mesh.rest()(v, 2) > 1 + gap / 2) direction[3 * v + 2] = -2 * gap;
-  }
-  const double t = contact.max_step(mesh.rest(), direction.data());
+  const double t = contact.max_step(mesh.rest(), blocks.upper_moved_by(Vec3(3 * dhat, 0, -2 * gap)).data());
   EXPECT_GT(t, 0.4);
   EXPECT_LT(t, 0.5);  // the gap halves by t = 0.25, and advancement keeps a tenth of it: t <= 0.45
 }
@@ -1101,18 +1098,13 @@ TEST(SurfaceContact, HalvesOfACutBlockSpinningTogetherSpinAsTheyDoWithoutContact
 // each move: checked by brute force at the moves' ends and middles.
 TEST(SurfaceContact, AListMadeForAMoveServesTheNextMoveTheSameWay) {
   const double dhat = 0.01;
-  const TetMesh mesh = two_blocks(0.5 * dhat);
-  Cutter cutter(mesh);
-  const MaterialSurface surface = cutter.surface();
-  const auto& copies = cutter.tet_nodes();
-  sim::detail::SurfaceContact contact;
-  start_contact(surface, copies, mesh.rest(), mesh.rest(), dhat, &contact);
+  BlocksInContact blocks(0.5 * dhat, dhat);
+  const TetMesh& mesh = blocks.mesh;
+  const MaterialSurface& surface = blocks.surface;
+  const auto& copies = blocks.cutter.tet_nodes();
+  sim::detail::SurfaceContact& contact = blocks.contact;
   // The upper block slides sideways by 1.5 dhat a move, half a thickness above the lower one.
-  std::vector<double> direction(3 * static_cast<std::size_t>(mesh.num_nodes()), 0.0);
-  Points move = Points::Zero(mesh.num_nodes(), 3);
-  for (Index v = 0; v < mesh.num_nodes(); ++v) {
-    if (mesh.rest()(v, 2) > 1) direction[3 * v] = move(v, 0) = 1.5 * dhat;
-  }
+  const Points move = blocks.upper_moved_by(Vec3(1.5 * dhat, 0, 0));
   const Points rest_vertices = surface.positions(copies, mesh.rest());
   // Every vertex-triangle pair of the two blocks within dhat at node positions x is listed.
   const auto all_near_pairs_listed = [&](const Points& x) {
@@ -1123,7 +1115,7 @@ TEST(SurfaceContact, AListMadeForAMoveServesTheNextMoveTheSameWay) {
   Points x = mesh.rest();
   const Index rebuilds_before = contact.num_rebuilds();
   for (int k = 0; k < 4; ++k) {
-    ASSERT_EQ(contact.max_step(x, direction.data()), 1) << "move " << k;  // sliding: nothing comes closer
+    ASSERT_EQ(contact.max_step(x, move.data()), 1) << "move " << k;  // sliding: nothing comes closer
     EXPECT_TRUE(all_near_pairs_listed(x + 0.5 * move)) << "move " << k;
     EXPECT_TRUE(all_near_pairs_listed(x + move)) << "move " << k;
     x += move;
