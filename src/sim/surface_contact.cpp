@@ -27,15 +27,20 @@ constexpr double kAdvanceShare = 0.9;
 // Conservative advancement gives up refining after this many advances and keeps the safe time
 // reached (the next Newton iteration goes on).
 constexpr int kMaxAdvances = 64;
-// The farthest one Newton step may move the surface's parts that may meet over it from the
-// middle of their motions (relative to each other: twice this), in contact thicknesses: a longer
-// direction is shortened to it before continuous collision detection (a trust region; pieces
-// that stay apart over the whole move do not count). The candidate list covers the whole move
-// (radius 2 dhat + the relative motion), so its pairs grow as the cube of the move: a wild direction on Figure 4's pile (500 to 700 dhat) made
-// a list that ran out of 16 GB, and 10 dhat still took 12 GB there. At 2, the scenes' ordinary
-// steps are rarely shortened (the flap 41 times in 150 steps, by at most a quarter; 36 sticks
-// twice), with the same Newton iterations.
+// The farthest one leg of a Newton step may move the surface's parts that may meet over it from
+// the middle of their motions (relative to each other: twice this), in contact thicknesses: a
+// longer direction is taken in legs of that length, each checked by continuous collision
+// detection in turn (a trust region; pieces that stay apart over the whole move do not count).
+// A leg's candidate list covers that leg (radius 2 dhat + its relative motion), and its pairs
+// grow as the cube of the leg: one list for a wild direction on Figure 4's pile (500 to 700 dhat)
+// ran out of 16 GB, and 10 dhat still took 12 GB there. At 2, the scenes' ordinary steps take one
+// leg (the flap's needed more 41 times in 150 steps, 36 sticks' twice).
 constexpr double kMaxSweep = 2;
+// The most legs of the trust region's length one Newton move may take (see max_step): 64
+// thicknesses of relative motion.
+constexpr int kMaxLegs = 16;
+// Bisections for the share of a move a guard allows (guards_share): to 2^-30 of the move.
+constexpr int kGuardBisections = 30;
 // The largest turn (radians, of the linear fit to a piece's motion) one Newton move may take where
 // the trust region takes the turn out. A list made at the move's end then bounds how much its
 // pairs were closer at the move's start (a turn along a straight move stretches pairs, by up to
@@ -222,7 +227,6 @@ void SurfaceContact::clear_surface() {
   copy_nodes_.clear();
   pieces_ = 0;
   vertex_piece_.clear();
-  guard_pieces_.clear();
   piece_vertices_ = {};
   piece_nodes_ = {};
   candidates_.clear();
@@ -1334,34 +1338,6 @@ double SurfaceContact::max_step(const Points& from, const double* direction) {
     const double turned = move_motion_.turned[i], plain = 2 * move_motion_.radius[i];
     return std::isfinite(turned) ? std::min(plain, 2 * turned + move_motion_.turn[i] * (dhat + 2 * turned)) : plain;
   };
-  // Where the guards hold parts of the surface, how far the move may go for them: a guard keeps
-  // its triangle's plane from the step's start, and a face that turns by theta within the step
-  // carries its own plane past the held one, where the guard's pair has slid by s along it, by
-  // up to theta s (a turn the two share moves the vector between them with the plane: to first
-  // order nothing). The room for that is the allowance less the guards' wall (kGuardWall). Until
-  // the turns were fitted, a guarded piece counted its whole motion in the trust region (twice
-  // its radius, at most 4 dhat a move), so that a piece of extent L turned by at most 4 dhat / L
-  // while its pairs slid by at most 4 dhat: theta s <= 16 dhat^2 / L. That product is kept, per
-  // pair of pieces the guards join, with both pieces' turns and the pair's relative motion in use
-  // (move_relative); where the whole motion allowed a longer move, that longer move. So the
-  // halves of a cut block spinning together, whose pairs barely slide, turn as they do without
-  // contact; a guarded pair sliding fast turns no further than before. O(guarded pairs).
-  const auto guarded_share = [&]() {
-    double share = std::numeric_limits<double>::infinity(), whole_share = std::numeric_limits<double>::infinity();
-    for (const auto& [p, q] : guard_pieces_) {
-      const auto i = static_cast<std::size_t>(p), j = static_cast<std::size_t>(q);
-      for (const std::size_t k : {i, j}) whole_share = std::min(whole_share, 2 * kMaxSweep * dhat / (2 * move_motion_.radius[k]));
-      if (!move_motion_.fits(i, j)) {
-        share = 0;
-        continue;
-      }
-      const double theta = std::max(move_motion_.turn[i], move_motion_.turn[j]), slide = move_relative(p, q);
-      const double extent = std::max((move_motion_.around[i].max - move_motion_.around[i].min).norm(),
-                                     (move_motion_.around[j].max - move_motion_.around[j].min).norm());
-      if (theta * slide > 0) share = std::min(share, std::sqrt(4 * kMaxSweep * kMaxSweep * dhat * dhat / extent / (theta * slide)));
-    }
-    return std::max(share, whole_share);
-  };
   // The largest of those of pieces that may meet, given their boxes at `from` or lower bounds of
   // them (apart by `gap` less the motion `since`), and the largest turn it counts.
   double turning = 0;
@@ -1420,16 +1396,132 @@ double SurfaceContact::max_step(const Points& from, const double* direction) {
     whole = whole_move();
   }
   if (!(whole > 0)) return 1;
-  // The move considered: the direction, shortened to the trust region where it goes beyond it,
-  // and to turns of at most kMaxTurn where a turn was taken out.
-  const double share = std::min({1.0, 2 * kMaxSweep * dhat / whole, turning > 0 ? kMaxTurn / turning : 1.0, guarded_share()});
-  const double relative = share * whole;
+  // The move is taken in legs, each within the trust region (and its turns within kMaxTurn where a
+  // turn was taken out): each leg's list covers that leg only, so a list never grows with the
+  // whole move. A leg over which nothing comes closer than conservative advancement allows leads
+  // to the next, up to kMaxLegs; the first leg that stops short ends the move there. Cut to one
+  // leg, a piece sliding along another faster than 2 kMaxSweep dhat a Newton move was held to that
+  // speed in the real-time solver; a wild direction on a pile stops within its first leg, where
+  // the pile's pairs meet. Where guards hold the surface, the whole move stays within what their
+  // planes, held from the step's start, allow (guards_share).
+  direction_placed_ = false;
+  const double leg = std::min({1.0, 2 * kMaxSweep * dhat / whole, turning > 0 ? kMaxTurn / turning : 1.0});
+  const double limit = guards_.empty() ? 1.0 : guards_share(from, motion);
+  double done = 0;  // the share of the direction behind the leg
+  for (int legs = 1;; ++legs) {
+    const double share = std::min(leg, limit - done);
+    if (legs > 1) leg_start_.swap(move_end_);  // the last leg's end (leg_step makes move_end_ anew)
+    const double t = leg_step(legs == 1 ? from : leg_start_, motion, share, share * whole);
+    if (t < 1 || legs == kMaxLegs || !(done + share < limit)) return done + t * share;
+    done += share;
+  }
+}
+
+void SurfaceContact::place_direction(const Eigen::Map<const Points>& motion) {
+  if (direction_placed_) return;
+  node_move_ = motion;
+  place(node_move_, &direction_move_);
+  direction_placed_ = true;
+}
+
+double SurfaceContact::guards_share(const Points& from, const Eigen::Map<const Points>& motion) {
+  // A guard holds g = n0 . r - zero above -wall, where r = sum_i w_i corner_i runs from a point of
+  // its triangle's plane (or of an edge in it) to the guarded vertex or edge, and n0 is the
+  // triangle's unit normal at the step's start. The side's true offset from the plane is n . r,
+  // with n the triangle's normal now: g is off by (n - n0) . r, at most |n - n0| |r|. Over a
+  // straight move to share s, r is linear (|r| at most its larger end) and the triangle's doubled
+  // area vector c = E1 x E2 quadratic, c(t) - c(0) = t (E1 x D2 + D1 x E2) + t^2 D1 x D2 (D the
+  // edges' motions): n(t) turns from n(0) by at most the part of that across n(0) over what is
+  // left of |c(0)| along it (a face stretched in its plane does not turn); |n(0) - n0| is
+  // measured. That error may use the allowance behind the wall (1 - kGuardWall of it) and
+  // whatever the guard stays clear of its wall by over the move (g is linear, and CCD stops it
+  // short of -wall): so the side never lies deeper behind its triangle's true plane than the
+  // allowance (or, for a guard made deeper than that to push a side back out, than its wall plus
+  // that room). Both sides are monotone in s: the largest s is found by bisection where s = 1
+  // fails. Each move starts where the last ended within its bound, and a step's guards start
+  // with n = n0, so the error is bounded over the whole step, not only within a move. A face
+  // turning with the guarded side (the halves of a cut spinning together) has r across the gap,
+  // a few hundredths of dhat, and moves freely; a side sliding along a turning face is held as
+  // far as its own slide and that face's turn require. (Before, a bound per pair of pieces from
+  // their fitted turns and relative motion, argued from an older rule's worst case: it cut the
+  // first step of the spinning halves to about a half.) O(guards + V).
+  place_direction(motion);
+  // The vertices at `from`: y_ where it was placed there (CCD's next move from an evaluated point).
+  const bool placed = y_nodes_.rows() == from.rows() && y_nodes_ == from;
+  if (!placed) place(from, &guard_from_);
+  const Points& at_from = placed ? y_ : guard_from_;
+  const double delta = guard_allowance();
+  return min_chunks(static_cast<Index>(guards_.size()), kNodeChunk, 1.0, &chunk_least_, [&](Index begin, Index end) {
+    double least = 1;
+    for (Index k = begin; k < end; ++k) {
+      const Guard& guard = guards_[static_cast<std::size_t>(k)];
+      Vec3 r0 = Vec3::Zero(), dr = Vec3::Zero();
+      for (int i = 0; i < 4; ++i) {
+        r0 += guard.w[i] * at_from.row(guard.corner[i]).transpose();
+        dr += guard.w[i] * direction_move_.row(guard.corner[i]).transpose();
+      }
+      const auto& tri = triangles_[static_cast<std::size_t>(guard.triangle)];
+      const auto at = [&](int i) { return Vec3(at_from.row(tri[static_cast<std::size_t>(i)]).transpose()); };
+      const auto moved = [&](int i) { return Vec3(direction_move_.row(tri[static_cast<std::size_t>(i)]).transpose()); };
+      const Vec3 e1 = at(1) - at(0), e2 = at(2) - at(0), d1 = moved(1) - moved(0), d2 = moved(2) - moved(0);
+      const Vec3 c0 = e1.cross(e2);
+      const double area = c0.norm();
+      const Vec3 n = area > 0 ? Vec3(c0 / area) : Vec3::Zero(), linear = e1.cross(d2) + d1.cross(e2), square = d1.cross(d2);
+      // c(t) - c(0) along n (a change of area, no turn) and across it (a turn).
+      const double linear_along = std::abs(linear.dot(n)), square_along = std::abs(square.dot(n));
+      const double linear_across = (linear - linear.dot(n) * n).norm(), square_across = (square - square.dot(n) * n).norm();
+      const double turned = area > 0 ? (n - guard.normal).norm() : 2.0;
+      const double g0 = guard.normal.dot(r0) - guard.zero, rate = guard.normal.dot(dr);
+      const auto error = [&](double s) {
+        // |n(t) - n(0)| <= the angle between c(t) and c(0) <= its tangent, |c(t) - c(0)| across n
+        // over c(0)'s length plus the change along n (while that stays positive).
+        const double below = area - s * linear_along - s * s * square_along;
+        const double turn = below > 0 ? std::min(2.0, turned + (s * linear_across + s * s * square_across) / below) : 2.0;
+        return turn * std::max(r0.norm(), (r0 + s * dr).norm());
+      };
+      const auto room = [&](double s) { return (1 - kGuardWall) * delta + std::max(0.0, guard.wall + std::min(g0, g0 + s * rate)); };
+      if (error(least) <= room(least)) continue;
+      // Past the room where the move starts (not along moves this allowed: each starts where the
+      // last ended within it, and a step's guards start with n = n0): no bound from this guard.
+      if (!(error(0) <= room(0))) continue;
+      double lo = 0, hi = least;
+      for (int i = 0; i < kGuardBisections; ++i) {
+        const double mid = (lo + hi) / 2;
+        (error(mid) <= room(mid) ? lo : hi) = mid;
+      }
+      least = lo;
+    }
+    return least;
+  });
+}
+
+double SurfaceContact::guard_excess(const Points& at) const {
+  Points y;
+  place(at, &y);
+  double excess = -std::numeric_limits<double>::infinity();
+  for (const Guard& guard : guards_) {
+    Vec3 r = Vec3::Zero();
+    for (int i = 0; i < 4; ++i) r += guard.w[i] * y.row(guard.corner[i]).transpose();
+    const auto& tri = triangles_[static_cast<std::size_t>(guard.triangle)];
+    const Vec3 a = y.row(tri[0]).transpose(), b = y.row(tri[1]).transpose(), c = y.row(tri[2]).transpose();
+    const Vec3 n = (b - a).cross(c - a).normalized();
+    const double allowed = guard.wall + (1 - kGuardWall) * guard_allowance();
+    excess = std::max(excess, -(n.dot(r) - guard.zero) - allowed);
+  }
+  return excess;
+}
+
+double SurfaceContact::leg_step(const Points& from, const Eigen::Map<const Points>& motion, double share, double relative) {
   node_move_ = share * motion;
   move_end_ = from + node_move_;
   cover(from, &move_end_, relative);
   // Each vertex's motion over the move, once, for the pairs and the guards (a candidate's and a
-  // guard's corners were embedded each time: 100k corners against 43k vertices on the sliced hand).
-  if (!candidates_.empty() || !guards_.empty()) place(node_move_, &vertex_move_);
+  // guard's corners were embedded each time: 100k corners against 43k vertices on the sliced hand):
+  // the direction's, placed once a call, scaled to the leg.
+  if (!candidates_.empty() || !guards_.empty()) {
+    place_direction(motion);
+    vertex_move_ = share * direction_move_;
+  }
   const bool counted_measured = (measured_ & kCounted) != 0;
   const double t_pairs = min_chunks(static_cast<Index>(candidates_.size()), kNodeChunk, 1.0, &chunk_least_, [&](Index begin, Index end) {
     double t_min = 1;
@@ -1527,11 +1619,11 @@ double SurfaceContact::max_step(const Points& from, const double* direction) {
       const double rate = guard.normal.dot(motion_r);  // over the move: `share` of the step
       // g is linear along the step: stop where all but kKeepShare of what was left of the
       // allowance is used up. (y_: the vertices at `from`, see cover.)
-      if (rate < 0) t_min = std::min(t_min, std::max(0.0, (1 - kKeepShare) * (guard_gap(guard, y_) + guard.wall) * share / -rate));
+      if (rate < 0) t_min = std::min(t_min, std::max(0.0, (1 - kKeepShare) * (guard_gap(guard, y_) + guard.wall) / -rate));
     }
     return t_min;
   });
-  return std::min(t_guard, share * t_pairs);
+  return std::min(t_guard, t_pairs);
 }
 
 double SurfaceContact::guard_zero(const std::array<Index, 4>& corner, const std::array<double, 4>& w, Index triangle) const {
@@ -1546,7 +1638,6 @@ double SurfaceContact::guard_zero(const std::array<Index, 4>& corner, const std:
 void SurfaceContact::lag_guards(const Points& start) {
   const PartTimer timer(&part_seconds_.guards, &part_seconds_.rebuild);
   guards_.clear();
-  guard_pieces_.clear();
   active_current_ = false;
   if (!enabled() || (joins_.empty() && group_facing_.empty())) return;
   cover(start, nullptr, 0);
@@ -1616,7 +1707,7 @@ void SurfaceContact::lag_guards(const Points& start) {
       for (std::size_t h = first_guard; h < guards_.size() && !same_plane; ++h) same_plane = guards_[h].normal.dot(found[j].normal) > 1 - kSamePlane;
       if (same_plane) continue;
       guards_.push_back({corners(candidates_[found[j].k]), {1.0, -found[j].beta[0], -found[j].beta[1], -found[j].beta[2]}, found[j].normal,
-                         found[j].zero, found[j].wall, Vec3::Zero(), 0.0});
+                         found[j].zero, found[j].wall, Vec3::Zero(), 0.0, candidates_[found[j].k].b});
       guard_vertex.push_back(found[j].vertex);
     }
     i = end;
@@ -1691,20 +1782,11 @@ void SurfaceContact::lag_guards(const Points& start) {
           // outside its material) it passed nothing.
           if (!(g > -delta) && !(p.free == 2 && behind_faces(edge, sign * p.r))) continue;
           // Its friction's start: r turned as the guard's (from the faces to the first edge).
-          out->push_back({corner, foot.w, normal, zero, guard_wall(g, delta), sign * p.r, p.distance});
+          out->push_back({corner, foot.w, normal, zero, guard_wall(g, delta), sign * p.r, p.distance, t});
         }
       }
     }
   });
-  // The pairs of pieces the guards join (a piece with itself where a cut runs within it): max_step
-  // bounds their turns within a move (see there).
-  for (const Guard& guard : guards_) {
-    const Index p = vertex_piece_[static_cast<std::size_t>(guard.corner[0])], q = vertex_piece_[static_cast<std::size_t>(guard.corner[2])];
-    const std::array<Index, 2> pieces{std::min(p, q), std::max(p, q)};
-    if (guard_pieces_.empty() || guard_pieces_.back() != pieces) guard_pieces_.push_back(pieces);  // mostly runs of one pair
-  }
-  std::sort(guard_pieces_.begin(), guard_pieces_.end());
-  guard_pieces_.erase(std::unique(guard_pieces_.begin(), guard_pieces_.end()), guard_pieces_.end());
 }
 
 void SurfaceContact::update_joins(const Points& at) {

@@ -78,7 +78,10 @@
 // triangle's turn within the step, which carries its own plane past the one held: corners pressed
 // to the wall at the bottom of Figure 4's pile were 1.0003 delta behind their triangles at the
 // step's end); conservative advancement keeps every guard's g above the wall in the line search,
-// as it keeps the pairs' distances above 0. A vertex found behind the whole allowance at a step's
+// as it keeps the pairs' distances above 0, and max_step bounds each move so that no guarded side
+// lies deeper behind its triangle's own plane than the allowance (the held plane's error is
+// (n - n0) . r, bounded per guard from its triangle's corners and r over the move: guards_share).
+// A vertex found behind the whole allowance at a step's
 // start, over its triangle, is guarded from where it is, its wall a hundredth of delta deeper, so
 // that the barrier pushes it back out (left unguarded, such a corner of Figure 4 sank 18
 // allowances into the other stick in four steps); so is an edge found crossed into the other
@@ -245,9 +248,10 @@ class SurfaceContact {
   /// bound of its corners' relative speed allows, or as the pair stays apart along the direction
   /// between its closest points, whichever is further). 1 when nothing comes close. A direction
   /// moving parts of the surface more than two thicknesses relative to each other (their turns
-  /// fitted and taken out where that shortens it) is first shortened to that (a trust region):
-  /// the candidate list covers the move considered. Where guards hold pieces, their turn and
-  /// slide over the move are bounded together as well (see guarded_share in max_step).
+  /// fitted and taken out where that shortens it) is taken in legs of that length (a trust
+  /// region), each covered by its own candidate list, on to the next while nothing stops a leg
+  /// short, at most kMaxLegs of them. Where guards hold the surface, the move stays within what
+  /// their planes, held from the step's start, allow (guards_share).
   double max_step(const Points& from, const double* direction);
 
   /// Friction of the step starting at `start`: the pairs in contact there, each with its normal
@@ -272,6 +276,11 @@ class SurfaceContact {
   /// material (see "Guards" above). O(candidates), in parallel.
   void lag_guards(const Points& start);
   Index num_guards() const { return static_cast<Index>(guards_.size()); }
+  /// For tests: how far the deepest guarded vertex or edge lies behind its triangle's own plane
+  /// (not the plane its guard holds from the step's start) at node positions `at`, beyond what
+  /// its guard allows: the allowance, or, where a guard was made deeper to push a side back out,
+  /// its wall and the room behind it. At most 0 while every guard holds. O(V + guards).
+  double guard_excess(const Points& at) const;
   /// The allowance: how far behind its guard's triangle a vertex may go (a tenth of dhat).
   double guard_allowance() const { return kGuardShare * settings_.thickness; }
   static constexpr double kGuardShare = 0.1;
@@ -355,7 +364,19 @@ class SurfaceContact {
   /// `move_end` (node positions), which moves near parts of the surface by at most
   /// `move_relative` relative to each other (max_step: the pieces that may meet over it).
   void cover(const Points& at, const Points* move_end, double move_relative);
+  /// One leg of max_step's move: `share` of the nodes' `motion` from `from`, moving the parts that
+  /// may meet by at most `relative` against each other. Covers it (move_end_ is its end) and
+  /// returns the share of the leg that conservative advancement allows, for the pairs and guards.
+  double leg_step(const Points& from, const Eigen::Map<const Points>& motion, double share, double relative);
+  /// The largest share of the direction `motion` from `from` over which no guard's plane, held
+  /// from the step's start, strays from its triangle's own by more than the guard's room.
+  double guards_share(const Points& from, const Eigen::Map<const Points>& motion);
+  /// direction_move_: the vertices' motion along the direction, placed once a max_step call.
+  void place_direction(const Eigen::Map<const Points>& motion);
+  Points direction_move_, guard_from_;
+  bool direction_placed_ = false;
   Points move_end_, node_move_, vertex_move_;  // max_step's scratch: the move's end, the nodes' and vertices' motions
+  Points leg_start_;                           // max_step's scratch: where a leg after the first starts
   std::vector<double> chunk_least_;  // max_step's scratch (min_chunks)
   /// How the surface moves, piece by piece (the mesh's connected parts, copies sharing nodes),
   /// when each node moves by some Vec3: per piece the centre of the box of its vertices' motions
@@ -578,6 +599,7 @@ class SurfaceContact {
     // start); a vertex guard's are zero (no friction).
     Vec3 start_r;
     double start_distance;
+    Index triangle;  // whose plane it holds (a vertex guard's triangle, or a face around an edge guard's second edge)
   };
   /// A guard's g at vertex positions y, less its zero.
   static double guard_gap(const Guard& guard, const Points& y);
@@ -620,7 +642,6 @@ class SurfaceContact {
   PieceOrder piece_vertices_, piece_nodes_;
   // Each vertex's piece.
   std::vector<Index> vertex_piece_;
-  std::vector<std::array<Index, 2>> guard_pieces_;  // the pairs of pieces this step's guards join (lag_guards)
   // The pieces' boxes at reference_, and at the vertices of pairs_reference_.
   PieceBoxes reference_boxes_, pairs_boxes_;
   // Scratch of the motions, and max_step's: the move's motion, the motion since the list, the
