@@ -1395,6 +1395,7 @@ double SurfaceContact::max_step(const Points& from, const double* direction) {
     piece_turn(piece_nodes_, moved_by, [&](Index n) { return Vec3(from.row(n).transpose()); }, weight_bound_, &move_motion_);
     whole = whole_move();
   }
+  guards_held_ = false;
   if (!(whole > 0)) return 1;
   // The move is taken in legs, each within the trust region (and its turns within kMaxTurn where a
   // turn was taken out): each leg's list covers that leg only, so a list never grows with the
@@ -1412,7 +1413,10 @@ double SurfaceContact::max_step(const Points& from, const double* direction) {
     const double share = std::min(leg, limit - done);
     if (legs > 1) leg_start_.swap(move_end_);  // the last leg's end (leg_step makes move_end_ anew)
     const double t = leg_step(legs == 1 ? from : leg_start_, motion, share, share * whole);
-    if (t < 1 || legs == kMaxLegs || !(done + share < limit)) return done + t * share;
+    if (t < 1 || legs == kMaxLegs || !(done + share < limit)) {
+      guards_held_ = t == 1 && limit < 1 && !(done + share < limit);
+      return done + t * share;
+    }
     done += share;
   }
 }
@@ -1450,7 +1454,6 @@ double SurfaceContact::guards_share(const Points& from, const Eigen::Map<const P
   const bool placed = y_nodes_.rows() == from.rows() && y_nodes_ == from;
   if (!placed) place(from, &guard_from_);
   const Points& at_from = placed ? y_ : guard_from_;
-  const double delta = guard_allowance();
   return min_chunks(static_cast<Index>(guards_.size()), kNodeChunk, 1.0, &chunk_least_, [&](Index begin, Index end) {
     double least = 1;
     for (Index k = begin; k < end; ++k) {
@@ -1479,7 +1482,8 @@ double SurfaceContact::guards_share(const Points& from, const Eigen::Map<const P
         const double turn = below > 0 ? std::min(2.0, turned + (s * linear_across + s * s * square_across) / below) : 2.0;
         return turn * std::max(r0.norm(), (r0 + s * dr).norm());
       };
-      const auto room = [&](double s) { return (1 - kGuardWall) * delta + std::max(0.0, guard.wall + std::min(g0, g0 + s * rate)); };
+      const double allowed = guard_depth(guard);
+      const auto room = [&](double s) { return allowed + std::max(-guard.wall, std::min(g0, g0 + s * rate)); };
       if (error(least) <= room(least)) continue;
       // Past the room where the move starts (not along moves this allowed: each starts where the
       // last ended within it, and a step's guards start with n = n0): no bound from this guard.
@@ -1495,6 +1499,11 @@ double SurfaceContact::guards_share(const Points& from, const Eigen::Map<const P
   });
 }
 
+double SurfaceContact::guard_depth(const Guard& guard) const {
+  const double delta = guard_allowance();
+  return std::max(delta, guard.wall + kRecoverShare * delta);
+}
+
 double SurfaceContact::guard_excess(const Points& at) const {
   Points y;
   place(at, &y);
@@ -1505,7 +1514,7 @@ double SurfaceContact::guard_excess(const Points& at) const {
     const auto& tri = triangles_[static_cast<std::size_t>(guard.triangle)];
     const Vec3 a = y.row(tri[0]).transpose(), b = y.row(tri[1]).transpose(), c = y.row(tri[2]).transpose();
     const Vec3 n = (b - a).cross(c - a).normalized();
-    const double allowed = guard.wall + (1 - kGuardWall) * guard_allowance();
+    const double allowed = guard_depth(guard);
     excess = std::max(excess, -(n.dot(r) - guard.zero) - allowed);
   }
   return excess;
@@ -1638,6 +1647,7 @@ double SurfaceContact::guard_zero(const std::array<Index, 4>& corner, const std:
 void SurfaceContact::lag_guards(const Points& start) {
   const PartTimer timer(&part_seconds_.guards, &part_seconds_.rebuild);
   guards_.clear();
+  guards_held_ = false;
   active_current_ = false;
   if (!enabled() || (joins_.empty() && group_facing_.empty())) return;
   cover(start, nullptr, 0);

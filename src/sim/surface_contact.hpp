@@ -281,6 +281,11 @@ class SurfaceContact {
   /// its guard allows: the allowance, or, where a guard was made deeper to push a side back out,
   /// its wall and the room behind it. At most 0 while every guard holds. O(V + guards).
   double guard_excess(const Points& at) const;
+  /// Whether the last max_step ended its move where the guards' planes, held since they were
+  /// made, allowed (guards_share): the caller may make them again where it stands (lag_guards)
+  /// before its next Newton iteration, so that a step in which faces turn and slide far against
+  /// each other is not held to what one set of planes allows.
+  bool guards_held_back() const { return guards_held_; }
   /// The allowance: how far behind its guard's triangle a vertex may go (a tenth of dhat).
   double guard_allowance() const { return kGuardShare * settings_.thickness; }
   static constexpr double kGuardShare = 0.1;
@@ -375,6 +380,7 @@ class SurfaceContact {
   void place_direction(const Eigen::Map<const Points>& motion);
   Points direction_move_, guard_from_;
   bool direction_placed_ = false;
+  bool guards_held_ = false;  // see guards_held_back
   Points move_end_, node_move_, vertex_move_;  // max_step's scratch: the move's end, the nodes' and vertices' motions
   Points leg_start_;                           // max_step's scratch: where a leg after the first starts
   std::vector<double> chunk_least_;  // max_step's scratch (min_chunks)
@@ -609,6 +615,9 @@ class SurfaceContact {
   /// at rest; less kGuardSlack of the allowance, so that sides that coincide up to rounding load
   /// none. The guard's term is r = sum_i w_i corner_i, its plane that of `triangle`.
   double guard_zero(const std::array<Index, 4>& corner, const std::array<double, 4>& w, Index triangle) const;
+  /// How deep behind its triangle's own plane a guard lets its side go: the allowance, or, for a
+  /// guard made where its side lay behind the wall already, a hair deeper than its wall.
+  double guard_depth(const Guard& guard) const;
   static constexpr double kGuardSlack = 1e-6;
   std::vector<Guard> guards_;
   std::vector<Index> first_vertex_guard_;  // lag_guards' scratch: per vertex its first guard, or -1
