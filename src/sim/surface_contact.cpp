@@ -36,9 +36,13 @@ constexpr int kMaxAdvances = 64;
 // ran out of 16 GB, and 10 dhat still took 12 GB there. At 2, the scenes' ordinary steps take one
 // leg (the flap's needed more 41 times in 150 steps, 36 sticks' twice).
 constexpr double kMaxSweep = 2;
-// The most legs of the trust region's length one Newton move may take (see max_step): 64
-// thicknesses of relative motion.
+// The most legs one Newton move may take (see max_step): 64 thicknesses of relative motion where
+// each leg is the trust region's length, more where legs grow (kMaxLegGrowth).
 constexpr int kMaxLegs = 16;
+// How long a leg may grow where the lists of the legs before it came out empty, in trust regions:
+// so that no list reaches far (a leg's list covers twice its relative motion and 2 dhat), where a
+// doubling leg would reach across a gap to another piece and list every pair of their faces.
+constexpr double kMaxLegGrowth = 4;
 // Bisections for the share of a move a guard allows (guards_share): to 2^-30 of the move.
 constexpr int kGuardBisections = 30;
 // The largest turn (radians, of the linear fit to a piece's motion) one Newton move may take where
@@ -1408,9 +1412,13 @@ double SurfaceContact::max_step(const Points& from, const double* direction) {
   direction_placed_ = false;
   const double leg = std::min({1.0, 2 * kMaxSweep * dhat / whole, turning > 0 ? kMaxTurn / turning : 1.0});
   const double limit = guards_.empty() ? 1.0 : guards_share(from, motion);
-  double done = 0;  // the share of the direction behind the leg
+  // A leg whose list came out empty (nothing within its reach, no guard) is followed by one twice
+  // as long, up to kMaxLegGrowth times the trust region: a piece deforming on its own, nothing
+  // near it (the hanging femur), takes its moves in a few legs, not one list for every 4
+  // thicknesses of them. Where anything was listed, legs keep the trust region's length.
+  double done = 0, length = leg;  // the share of the direction behind the leg, and the next leg's
   for (int legs = 1;; ++legs) {
-    const double share = std::min(leg, limit - done);
+    const double share = std::min(length, limit - done);
     if (legs > 1) leg_start_.swap(move_end_);  // the last leg's end (leg_step makes move_end_ anew)
     const double t = leg_step(legs == 1 ? from : leg_start_, motion, share, share * whole);
     if (t < 1 || legs == kMaxLegs || !(done + share < limit)) {
@@ -1418,6 +1426,7 @@ double SurfaceContact::max_step(const Points& from, const double* direction) {
       return done + t * share;
     }
     done += share;
+    length = candidates_.empty() && guards_.empty() ? std::min(2 * length, kMaxLegGrowth * leg) : leg;
   }
 }
 

@@ -848,9 +848,11 @@ TEST(SurfaceContact, PairsOfNeighbouringCopiesAcrossACutCountWhereTheyLayApart) 
 }
 
 // A Newton direction that flings one block 40 m away from the other (nothing in between): the step
-// is taken in legs of the trust region, two thicknesses of relative motion each, at most kMaxLegs
-// (16) of them, and each leg's candidate list covers that leg only. Covering the whole move listed
-// every pair of the two blocks, and on Figure 4's pile ran out of memory.
+// is taken in legs, each leg's candidate list covering that leg only, at most kMaxLegs (16) of
+// them. The first is the trust region's (two thicknesses each way of the motions' middle); each
+// list comes out empty, so each leg is twice as long as the last, up to four trust regions. None
+// reaches across the 0.3 between the blocks: no pair is ever listed. One list for the whole move
+// listed every pair of the two blocks, and on Figure 4's pile ran out of memory.
 TEST(SurfaceContact, AWildDirectionIsTakenInLegsOfTheTrustRegion) {
   const double dhat = 0.01;
   BlocksInContact blocks(0.3, dhat);
@@ -858,9 +860,10 @@ TEST(SurfaceContact, AWildDirectionIsTakenInLegsOfTheTrustRegion) {
   sim::detail::SurfaceContact& contact = blocks.contact;
   Points direction = blocks.upper_moved_by(Vec3(0, 0, 40));  // straight up
   const double t = contact.max_step(mesh.rest(), direction.data());
-  // 16 legs of two thicknesses of 40 m (relative to the motions' middle: 20 m each way).
-  EXPECT_LE(t, 16 * 2 * dhat / 20 * (1 + 1e-12));
-  EXPECT_GE(t, 16 * 2 * dhat / 20 * (1 - 1e-12));
+  // Legs of 1, 2, then 4 trust regions (two thicknesses of 40 m each way: 20 m), 16 in all.
+  const double trust = 2 * dhat / 20, legs = 1 + 2 + 14 * 4;
+  EXPECT_LE(t, legs * trust * (1 + 1e-12));
+  EXPECT_GE(t, legs * trust * (1 - 1e-12));
   EXPECT_EQ(contact.num_candidates(), 0);  // the blocks are 0.3 apart: no pair within the move
   // A short direction is taken whole.
   direction *= 1e-4;
