@@ -1449,10 +1449,11 @@ double SurfaceContact::guards_share(const Points& from, const Eigen::Map<const P
   // measured. That error may use the allowance behind the wall (1 - kGuardWall of it) and
   // whatever the guard stays clear of its wall by over the move (g is linear, and CCD stops it
   // short of -wall): so the side never lies deeper behind its triangle's true plane than the
-  // allowance (or, for a guard made deeper than that to push a side back out, than its wall plus
-  // that room). Both sides are monotone in s: the largest s is found by bisection where s = 1
-  // fails. Each move starts where the last ended within its bound, and a step's guards start
-  // with n = n0, so the error is bounded over the whole step, not only within a move. A face
+  // allowance (or, for a guard made where its side lay behind the wall already, to push it back
+  // out, than a hair beyond that wall: guard_depth). Both sides are monotone in s: the largest s
+  // is found by bisection where s = 1 fails. Each move starts where the last ended within its
+  // bound, and guards start with n = n0 (at a step's start, or made again within it), so the
+  // error is bounded over the whole step, not only within a move. A face
   // turning with the guarded side (the halves of a cut spinning together) has r across the gap,
   // a few hundredths of dhat, and moves freely; a side sliding along a turning face is held as
   // far as its own slide and that face's turn require. (Before, a bound per pair of pieces from
