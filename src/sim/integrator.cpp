@@ -555,7 +555,7 @@ StepReport Simulator::minimise(const StepOptions& options, bool inertia) {
       const Clock::time_point t0 = Clock::now();
       // Where the last move ended at what the guards' planes allow, they are made again here:
       // the potential changes with them, so it is evaluated after.
-      if (s.surface_contact.enabled() && s.surface_contact.guards_held_back()) s.surface_contact.lag_guards(x);
+      if (s.surface_contact.guards_held_back()) s.surface_contact.lag_guards(x);
       energy = potential.evaluate_with_hessian(x, &s.current_gradient);
       report.assemble_seconds += seconds_since(t0);
     }

@@ -585,11 +585,13 @@ void SurfaceContact::make_term(const std::array<Index, 4>& k, const std::array<d
   }
 }
 
-double SurfaceContact::guard_gap(const Guard& guard, const Points& y) {
+Vec3 SurfaceContact::guard_vector(const Guard& guard, const Points& y) {
   Vec3 r = Vec3::Zero();
   for (int i = 0; i < 4; ++i) r += guard.w[i] * y.row(guard.corner[i]).transpose();
-  return guard.normal.dot(r) - guard.zero;
+  return r;
 }
+
+double SurfaceContact::guard_gap(const Guard& guard, const Points& y) { return guard.normal.dot(guard_vector(guard, y)) - guard.zero; }
 
 void SurfaceContact::guard_term(const Guard& guard, ContactTerm* t) const {
   make_term(guard.corner, guard.w, t);
@@ -1468,11 +1470,7 @@ double SurfaceContact::guards_share(const Points& from, const Eigen::Map<const P
     double least = 1;
     for (Index k = begin; k < end; ++k) {
       const Guard& guard = guards_[static_cast<std::size_t>(k)];
-      Vec3 r0 = Vec3::Zero(), dr = Vec3::Zero();
-      for (int i = 0; i < 4; ++i) {
-        r0 += guard.w[i] * at_from.row(guard.corner[i]).transpose();
-        dr += guard.w[i] * direction_move_.row(guard.corner[i]).transpose();
-      }
+      const Vec3 r0 = guard_vector(guard, at_from), dr = guard_vector(guard, direction_move_);
       const auto& tri = triangles_[static_cast<std::size_t>(guard.triangle)];
       const auto at = [&](int i) { return Vec3(at_from.row(tri[static_cast<std::size_t>(i)]).transpose()); };
       const auto moved = [&](int i) { return Vec3(direction_move_.row(tri[static_cast<std::size_t>(i)]).transpose()); };
@@ -1519,8 +1517,7 @@ double SurfaceContact::guard_excess(const Points& at) const {
   place(at, &y);
   double excess = -std::numeric_limits<double>::infinity();
   for (const Guard& guard : guards_) {
-    Vec3 r = Vec3::Zero();
-    for (int i = 0; i < 4; ++i) r += guard.w[i] * y.row(guard.corner[i]).transpose();
+    const Vec3 r = guard_vector(guard, y);
     const auto& tri = triangles_[static_cast<std::size_t>(guard.triangle)];
     const Vec3 a = y.row(tri[0]).transpose(), b = y.row(tri[1]).transpose(), c = y.row(tri[2]).transpose();
     const Vec3 n = (b - a).cross(c - a).normalized();
@@ -1633,9 +1630,7 @@ double SurfaceContact::leg_step(const Points& from, const Eigen::Map<const Point
     double t_min = 1;
     for (Index k = begin; k < end; ++k) {
       const Guard& guard = guards_[static_cast<std::size_t>(k)];
-      Vec3 motion_r = Vec3::Zero();
-      for (int i = 0; i < 4; ++i) motion_r += guard.w[i] * vertex_move_.row(guard.corner[i]).transpose();
-      const double rate = guard.normal.dot(motion_r);  // over the move: `share` of the step
+      const double rate = guard.normal.dot(guard_vector(guard, vertex_move_));  // over the leg
       // g is linear along the step: stop where all but kKeepShare of what was left of the
       // allowance is used up. (y_: the vertices at `from`, see cover.)
       if (rate < 0) t_min = std::min(t_min, std::max(0.0, (1 - kKeepShare) * (guard_gap(guard, y_) + guard.wall) / -rate));

@@ -278,8 +278,9 @@ class SurfaceContact {
   Index num_guards() const { return static_cast<Index>(guards_.size()); }
   /// For tests: how far the deepest guarded vertex or edge lies behind its triangle's own plane
   /// (not the plane its guard holds from the step's start) at node positions `at`, beyond what
-  /// its guard allows: the allowance, or, where a guard was made deeper to push a side back out,
-  /// its wall and the room behind it. At most 0 while every guard holds. O(V + guards).
+  /// its guard allows (guard_depth: the allowance, or, where a guard was made behind its wall to
+  /// push a side back out, a hair beyond that wall). At most 0 while every guard holds.
+  /// O(V + guards).
   double guard_excess(const Points& at) const;
   /// Whether the last max_step ended its move where the guards' planes, held since they were
   /// made, allowed (guards_share): the caller may make them again where it stands (lag_guards)
@@ -607,6 +608,8 @@ class SurfaceContact {
     double start_distance;
     Index triangle;  // whose plane it holds (a vertex guard's triangle, or a face around an edge guard's second edge)
   };
+  /// A guard's r = sum_i w_i corner_i at vertex positions (or motions) y.
+  static Vec3 guard_vector(const Guard& guard, const Points& y);
   /// A guard's g at vertex positions y, less its zero.
   static double guard_gap(const Guard& guard, const Points& y);
   void guard_term(const Guard& guard, ContactTerm* t) const;
