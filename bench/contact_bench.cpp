@@ -9,7 +9,8 @@
 // surface triangles, cut by a slanted plane; the upper part slides down the cut, thousands of
 // pairs within the thickness).
 //
-// Usage: tetcut_bench_contact [SCENE] [STEPS]
+// Usage: tetcut_bench_contact [SCENE] [STEPS] [off|on]: both runs unless one is named (one alone,
+// for a profiler).
 
 #include <tetcut/scene.hpp>
 #include <tetcut/session.hpp>
@@ -25,6 +26,11 @@ int main(int argc, char** argv) {
   using namespace tetcut;
   const std::string path = argc > 1 ? argv[1] : TETCUT_EXAMPLES "/live-femur.json";
   const int steps = argc > 2 ? std::atoi(argv[2]) : 60;
+  const std::string only = argc > 3 ? argv[3] : "";
+  if (!only.empty() && only != "on" && only != "off") {
+    std::fprintf(stderr, "tetcut_bench_contact: the third argument is on or off, not '%s'\n", only.c_str());
+    return 2;
+  }
   Scene scene = load_scene(path);
   std::printf("scene %s, %d steps from rest\n", path.c_str(), steps);
   std::printf("%-16s %8s %8s %10s %10s %10s %12s %10s %10s %12s %10s %8s %8s %11s %9s %10s\n", "self_collision", "tets", "surface",
@@ -32,6 +38,7 @@ int main(int argc, char** argv) {
               "assemble ms", "solve ms", "search ms");
   std::vector<sim::Simulator::SurfaceContactState> parts;
   for (const bool on : {false, true}) {
+    if (!only.empty() && (only == "on") != on) continue;
     scene.self_collision = on;
     Session session(scene);
     std::vector<double> ms;
@@ -64,7 +71,7 @@ int main(int argc, char** argv) {
   std::printf("%-16s %10s %10s %10s %10s %10s\n", "contact parts", "rebuild", "ccd", "active", "guards", "joins");
   for (std::size_t i = 0; i < parts.size(); ++i) {
     const sim::Simulator::SurfaceContactState& c = parts[i];
-    std::printf("%-16s %10.2f %10.2f %10.2f %10.2f %10.2f\n", i == 0 ? "off" : "on", 1e3 * c.rebuild_seconds / steps, 1e3 * c.ccd_seconds / steps,
+    std::printf("%-16s %10.2f %10.2f %10.2f %10.2f %10.2f\n", parts.size() == 1 ? only.c_str() : i == 0 ? "off" : "on", 1e3 * c.rebuild_seconds / steps, 1e3 * c.ccd_seconds / steps,
                 1e3 * c.active_seconds / steps, 1e3 * c.guard_seconds / steps, 1e3 * c.join_seconds / steps);
   }
 }
