@@ -1466,22 +1466,36 @@ double SurfaceContact::guards_share(const Points& from, const Eigen::Map<const P
   const bool placed = y_nodes_.rows() == from.rows() && y_nodes_ == from;
   if (!placed) place(from, &guard_from_);
   const Points& at_from = placed ? y_ : guard_from_;
+  // Each triangle's terms once (O(guards' triangles)), then each guard's bound (O(guards)).
+  triangle_turns_.resize(guard_triangles_.size());
+  for_chunks(static_cast<Index>(guard_triangles_.size()), kNodeChunk, [&](Index begin, Index end, Index) {
+    for (Index k = begin; k < end; ++k) {
+      const auto& tri = triangles_[static_cast<std::size_t>(guard_triangles_[static_cast<std::size_t>(k)])];
+      const auto at = [&](int i) { return Vec3(at_from.row(tri[static_cast<std::size_t>(i)]).transpose()); };
+      const auto moved = [&](int i) { return Vec3(direction_move_.row(tri[static_cast<std::size_t>(i)]).transpose()); };
+      const Vec3 e1 = at(1) - at(0), e2 = at(2) - at(0), d1 = moved(1) - moved(0), d2 = moved(2) - moved(0);
+      const Vec3 c0 = e1.cross(e2);
+      TriangleTurn& turn = triangle_turns_[static_cast<std::size_t>(k)];
+      turn.area = c0.norm();
+      turn.normal = turn.area > 0 ? Vec3(c0 / turn.area) : Vec3::Zero();
+      const Vec3& n = turn.normal;
+      const Vec3 linear = e1.cross(d2) + d1.cross(e2), square = d1.cross(d2);
+      // c(t) - c(0) along n (a change of area, no turn) and across it (a turn).
+      turn.linear_along = std::abs(linear.dot(n));
+      turn.square_along = std::abs(square.dot(n));
+      turn.linear_across = (linear - linear.dot(n) * n).norm();
+      turn.square_across = (square - square.dot(n) * n).norm();
+    }
+  });
   return min_chunks(static_cast<Index>(guards_.size()), kNodeChunk, 1.0, &chunk_least_, [&](Index begin, Index end) {
     double least = 1;
     for (Index k = begin; k < end; ++k) {
       const Guard& guard = guards_[static_cast<std::size_t>(k)];
       const Vec3 r0 = guard_vector(guard, at_from), dr = guard_vector(guard, direction_move_);
-      const auto& tri = triangles_[static_cast<std::size_t>(guard.triangle)];
-      const auto at = [&](int i) { return Vec3(at_from.row(tri[static_cast<std::size_t>(i)]).transpose()); };
-      const auto moved = [&](int i) { return Vec3(direction_move_.row(tri[static_cast<std::size_t>(i)]).transpose()); };
-      const Vec3 e1 = at(1) - at(0), e2 = at(2) - at(0), d1 = moved(1) - moved(0), d2 = moved(2) - moved(0);
-      const Vec3 c0 = e1.cross(e2);
-      const double area = c0.norm();
-      const Vec3 n = area > 0 ? Vec3(c0 / area) : Vec3::Zero(), linear = e1.cross(d2) + d1.cross(e2), square = d1.cross(d2);
-      // c(t) - c(0) along n (a change of area, no turn) and across it (a turn).
-      const double linear_along = std::abs(linear.dot(n)), square_along = std::abs(square.dot(n));
-      const double linear_across = (linear - linear.dot(n) * n).norm(), square_across = (square - square.dot(n) * n).norm();
-      const double turned = area > 0 ? (n - guard.normal).norm() : 2.0;
+      const TriangleTurn& terms = triangle_turns_[static_cast<std::size_t>(guard_triangle_slot_[static_cast<std::size_t>(guard.triangle)])];
+      const double area = terms.area, linear_along = terms.linear_along, square_along = terms.square_along;
+      const double linear_across = terms.linear_across, square_across = terms.square_across;
+      const double turned = area > 0 ? (terms.normal - guard.normal).norm() : 2.0;
       const double g0 = guard.normal.dot(r0) - guard.zero, rate = guard.normal.dot(dr);
       const auto error = [&](double s) {
         // |n(t) - n(0)| <= the angle between c(t) and c(0) <= its tangent, |c(t) - c(0)| across n
@@ -1802,6 +1816,21 @@ void SurfaceContact::lag_guards(const Points& start) {
       }
     }
   });
+  index_guard_triangles();
+}
+
+void SurfaceContact::index_guard_triangles() {
+  // O(guards): the slots of the triangles met before are read back from the slot array, which is
+  // valid for the triangles listed only (sized once for the surface).
+  guard_triangle_slot_.resize(triangles_.size());
+  guard_triangles_.clear();
+  for (const Guard& guard : guards_) {
+    const auto t = static_cast<std::size_t>(guard.triangle);
+    const Index slot = guard_triangle_slot_[t];
+    if (slot < static_cast<Index>(guard_triangles_.size()) && slot >= 0 && guard_triangles_[static_cast<std::size_t>(slot)] == guard.triangle) continue;
+    guard_triangle_slot_[t] = static_cast<Index>(guard_triangles_.size());
+    guard_triangles_.push_back(guard.triangle);
+  }
 }
 
 void SurfaceContact::update_joins(const Points& at) {

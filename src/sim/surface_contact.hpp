@@ -377,9 +377,22 @@ class SurfaceContact {
   /// The largest share of the direction `motion` from `from` over which no guard's plane, held
   /// from the step's start, strays from its triangle's own by more than the guard's room.
   double guards_share(const Points& from, const Eigen::Map<const Points>& motion);
+  /// guard_triangles_ and guard_triangle_slot_ for guards_.
+  void index_guard_triangles();
   /// direction_move_: the vertices' motion along the direction, placed once a max_step call.
   void place_direction(const Eigen::Map<const Points>& motion);
   Points direction_move_, guard_from_;
+  /// How a guard's triangle turns along a move (guards_share): its unit normal n and doubled area
+  /// at the move's start, and the parts along and across n of its area vector's change, linear
+  /// and quadratic in the move's share. The same for every guard of the triangle.
+  struct TriangleTurn {
+    Vec3 normal;
+    double area, linear_along, square_along, linear_across, square_across;
+  };
+  /// The guards' triangles, each once, and each triangle's place among them (valid for those):
+  /// made with the guards (a triangle holds 6 to 16 on the sliced hand).
+  std::vector<Index> guard_triangles_, guard_triangle_slot_;
+  std::vector<TriangleTurn> triangle_turns_;  // guards_share's scratch, by guard_triangles_
   bool direction_placed_ = false;
   bool guards_held_ = false;  // see guards_held_back
   Points move_end_, node_move_, vertex_move_;  // max_step's scratch: the move's end, the nodes' and vertices' motions
