@@ -30,11 +30,13 @@ using testing::load_error;
 constexpr const char* kCube = R"("mesh": {"grid": {"box": [0, 0, 0.05, 1, 1, 1.05], "cells": [2, 2, 2]}})";
 
 // The benchmark scenes (bench/scenes), which no test runs (minutes each), still load as the
-// scene format changes: the sliced hand and the two larger stick piles of issue 16.
+// scene format changes: the sliced hand and ball and the two larger stick piles of issue 16.
 TEST(Scene, BenchScenesLoad) {
   const std::filesystem::path dir = TETCUT_BENCH_SCENES;
-  const Scene hand = load_scene(dir / "hand-sliced.json");  // self_collision: the bench sets it
-  EXPECT_EQ(hand.cuts.size(), 1u);
+  for (const char* name : {"hand-sliced.json", "ball-sliced.json"}) {
+    const Scene sliced = load_scene(dir / name);  // self_collision: the bench sets it
+    EXPECT_EQ(sliced.cuts.size(), 1u) << name;
+  }
   for (const auto& [name, planes] : {std::pair{"sticks-81.json", 16u}, std::pair{"sticks-144.json", 22u}}) {
     const Scene sticks = load_scene(dir / name);
     EXPECT_TRUE(sticks.self_collision) << name;
