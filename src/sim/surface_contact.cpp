@@ -1542,8 +1542,7 @@ double SurfaceContact::guard_excess(const Points& at) const {
 }
 
 double SurfaceContact::leg_step(const Points& from, const Eigen::Map<const Points>& motion, double share, double relative) {
-  node_move_ = share * motion;
-  move_end_ = from + node_move_;
+  move_end_ = from + share * motion;
   cover(from, &move_end_, relative);
   // Each vertex's motion over the move, once, for the pairs and the guards (a candidate's and a
   // guard's corners were embedded each time: 100k corners against 43k vertices on the sliced hand):

@@ -395,7 +395,9 @@ class SurfaceContact {
   std::vector<TriangleTurn> triangle_turns_;  // guards_share's scratch, by guard_triangles_
   bool direction_placed_ = false;
   bool guards_held_ = false;  // see guards_held_back
-  Points move_end_, node_move_, vertex_move_;  // max_step's scratch: the move's end, the nodes' and vertices' motions
+  // max_step's scratch: a leg's end (nodes), the direction's node motion (for place_direction)
+  // and the vertices' motion over a leg.
+  Points move_end_, node_move_, vertex_move_;
   Points leg_start_;                           // max_step's scratch: where a leg after the first starts
   std::vector<double> chunk_least_;  // max_step's scratch (min_chunks)
   /// How the surface moves, piece by piece (the mesh's connected parts, copies sharing nodes),
