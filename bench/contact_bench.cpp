@@ -37,6 +37,7 @@ int main(int argc, char** argv) {
               "median ms", "mean ms", "p99 ms", "contact pairs", "ccd ms", "rebuilds", "copy pairs", "candidates", "newton", "cg",
               "assemble ms", "solve ms", "search ms");
   std::vector<sim::Simulator::SurfaceContactState> parts;
+  std::vector<double> matrix_ms;  // per run, the constraint terms' matrix ms a step
   for (const bool on : {false, true}) {
     if (!only.empty() && (only == "on") != on) continue;
     scene.self_collision = on;
@@ -46,7 +47,7 @@ int main(int argc, char** argv) {
     double ccd = 0;
     // Per step, over the steps: where a step's time goes (contact's energies and matrices are
     // in assemble and search, its CCD in ccd).
-    double newton = 0, cg = 0, assemble = 0, solve = 0, search = 0;
+    double newton = 0, cg = 0, assemble = 0, solve = 0, search = 0, matrix = 0;
     for (int s = 0; s < steps; ++s) {
       const bench::Clock::time_point start = bench::Clock::now();
       const SessionStep step = session.advance();
@@ -58,6 +59,7 @@ int main(int argc, char** argv) {
       assemble += 1e3 * step.report.assemble_seconds;
       solve += 1e3 * step.report.solve_seconds;
       search += 1e3 * step.report.line_search_seconds;
+      matrix += 1e3 * step.report.constraint_matrix_seconds;
     }
     const sim::Simulator::SurfaceContactState contact = session.simulator().surface_contact();
     std::printf("%-16s %8d %8d %10.2f %10.2f %10.2f %12d %10.2f %10d %12d %10d %8.2f %8.1f %11.2f %9.2f %10.2f\n", on ? "on" : "off",
@@ -65,13 +67,16 @@ int main(int argc, char** argv) {
                 bench::percentile(ms, 0.99), pairs, ccd / steps, contact.rebuilds, contact.copy_pair_rebuilds, contact.candidates,
                 newton / steps, cg / steps, assemble / steps, solve / steps, search / steps);
     parts.push_back(contact);
+    matrix_ms.push_back(matrix / steps);
   }
-  // Contact's own parts, ms a step over the run (each apart from the rebuilds it set off; the
-  // terms' matrices and the solve are in assemble and solve above).
-  std::printf("%-16s %10s %10s %10s %10s %10s\n", "contact parts", "rebuild", "ccd", "active", "guards", "joins");
+  // Contact's own parts, ms a step over the run (each apart from the rebuilds it set off), and
+  // the constraint terms' blocks added into the Newton matrix (in assemble above; without
+  // contact, the obstacles' and springs' terms). The solve with contact's blocks is in solve.
+  std::printf("%-16s %10s %10s %10s %10s %10s %10s\n", "contact parts", "rebuild", "ccd", "active", "guards", "joins", "matrix");
   for (std::size_t i = 0; i < parts.size(); ++i) {
     const sim::Simulator::SurfaceContactState& c = parts[i];
-    std::printf("%-16s %10.2f %10.2f %10.2f %10.2f %10.2f\n", parts.size() == 1 ? only.c_str() : i == 0 ? "off" : "on", 1e3 * c.rebuild_seconds / steps, 1e3 * c.ccd_seconds / steps,
-                1e3 * c.active_seconds / steps, 1e3 * c.guard_seconds / steps, 1e3 * c.join_seconds / steps);
+    std::printf("%-16s %10.2f %10.2f %10.2f %10.2f %10.2f %10.2f\n", parts.size() == 1 ? only.c_str() : i == 0 ? "off" : "on",
+                1e3 * c.rebuild_seconds / steps, 1e3 * c.ccd_seconds / steps, 1e3 * c.active_seconds / steps, 1e3 * c.guard_seconds / steps,
+                1e3 * c.join_seconds / steps, matrix_ms[i]);
   }
 }

@@ -147,6 +147,9 @@ struct StepReport {
   /// Wall time of the step's stages in seconds: element energies, stresses and Hessians with
   /// their assembly; the linear solves; the line search (energies and gradients of trial points).
   double assemble_seconds = 0, solve_seconds = 0, line_search_seconds = 0;
+  /// Of assemble_seconds: adding the contact and spring terms' blocks into the Newton matrix
+  /// (their number grows with the surface pairs in contact and the guards pressed).
+  double constraint_matrix_seconds = 0;
   /// Surface contact (Simulator::set_contact_surface): pairs of primitives closer than the
   /// contact thickness at the end of the step; Newton steps that continuous collision detection
   /// shortened (moves it stopped before two parts of the surface met); seconds it took, with the

@@ -102,6 +102,8 @@ void bind_sim(py::module_& root) {
       .def_readonly("assemble_seconds", &StepReport::assemble_seconds)
       .def_readonly("solve_seconds", &StepReport::solve_seconds)
       .def_readonly("line_search_seconds", &StepReport::line_search_seconds)
+      .def_readonly("constraint_matrix_seconds", &StepReport::constraint_matrix_seconds,
+                    "Of assemble_seconds: the contact and spring terms added into the Newton matrix.")
       .def_readonly("contact_pairs", &StepReport::contact_pairs, "Surface pairs closer than the contact thickness at the end.")
       .def_readonly("contact_limited_steps", &StepReport::contact_limited_steps,
                     "Newton steps that continuous collision detection shortened.")

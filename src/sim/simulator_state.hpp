@@ -124,6 +124,8 @@ struct SimulatorState {
   Points assembled_at;
   std::vector<double> ledger_nodal;
   std::vector<ConstraintTerm> ledger_constraints;
+  // Seconds add_recorded_terms took, summed (a step reports its share: StepReport).
+  double constraint_matrix_seconds = 0;
   std::vector<std::pair<OrderedElement, Mat3>> reuse_take_out;
   std::vector<Index> reuse_put_in;
   // Scratch of the constraint terms' scatter: per term its first block, per block its slot; the

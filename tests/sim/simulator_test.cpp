@@ -195,6 +195,29 @@ TEST_P(Integrator, CubeComesToRestOnTheGround) {
   EXPECT_LT(sim.velocities().cwiseAbs().maxCoeff(), 1e-3);
 }
 
+// The report's share of assembly spent adding constraint terms into the Newton matrix: none while
+// nothing touches (no term), some once the block's points press into the ground (a term each),
+// and never more than the assembly it is part of. No time is asserted, only where it is counted.
+TEST(StepReport, ConstraintMatrixTimeCountsOnlyWhileTermsExist) {
+  const TetMesh cube = make_grid(Box{Vec3(0, 0, 0.05), Vec3(0.2, 0.2, 0.25)}, {2, 2, 2}, 5);
+  Material material;
+  material.youngs_modulus = 1e6;
+  Simulator sim(cube, material);
+  sim.set_contact_points(corner_points(cube));
+  sim.add_obstacle(Obstacle::plane(Vec3::Zero(), Vec3(0, 0, 1)));
+  StepOptions options;
+  options.dt = 0.01;
+  const StepReport falling = sim.step(options);
+  EXPECT_EQ(falling.constraint_matrix_seconds, 0.0) << "0.05 above the ground: no point touches";
+  bool pressed = false;
+  for (int s = 0; s < 60 && !pressed; ++s) {
+    const StepReport report = sim.step(options);
+    EXPECT_LE(report.constraint_matrix_seconds, report.assemble_seconds);
+    pressed = report.constraint_matrix_seconds > 0;
+  }
+  EXPECT_TRUE(pressed) << "the block lands within 0.6 s and its points press into the ground";
+}
+
 // A block resting on the ground is pushed sideways at v0: with friction mu it slides
 // v0^2 / (2 mu g) and stops (Coulomb); without, it keeps going.
 double slide_on_the_ground(Model model, double mu, Vec3* final_velocity) {
