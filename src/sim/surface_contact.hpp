@@ -644,8 +644,9 @@ class SurfaceContact {
   // Per triangle its unit normal in the material; per vertex its triangles (CSR).
   std::vector<Vec3> rest_normals_;
   std::vector<Index> vertex_triangle_start_, vertex_triangles_;
-  // Per edge its triangles, ascending (CSR).
+  // Per edge its triangles, ascending (CSR); per triangle its edges, side k from corner k.
   std::vector<Index> edge_triangle_start_, edge_triangles_;
+  std::vector<std::array<Index, 3>> triangle_edges_;
   // The Verlet list: candidates within rho_ of each other at vertex positions reference_.
   std::vector<Candidate> candidates_;
   std::vector<collision::Proximity> proximities_;
@@ -697,6 +698,7 @@ class SurfaceContact {
   // copies of its other triangles, an edge by the copies of all its triangles (its own, the
   // first's, first): see set_surface.
   std::vector<Index> group_copy_;
+  std::vector<Index> copy_group_;  // per copy its group, or -1
   // Per triangle: on a two-sided cut (a cut triangle with material on both sides somewhere; not
   // an embedded model's carved surface). Per group (CSR): the rest normals of such triangles
   // around the primitives it owns. Pairs of copies that share a node are listed too

@@ -740,6 +740,35 @@ TEST(SurfaceContact, APairTheCheckWouldCountIsACandidateWhateverCopyEmbedsItsCor
   EXPECT_EQ(pairs.missing_edges, 0) << "of " << pairs.counted_edges << " edge pairs";
 }
 
+// The surface's edges, found around each edge's lower vertex (not by sorting every side): each
+// side of a triangle is one edge, each edge is a side, and they come in ascending order of
+// (lower, higher) vertex, the order the candidates' edge pairs are numbered in. On a slinky cut
+// along a helix: two-sided cuts, rims where three triangles meet, thousands of copies.
+TEST(SurfaceContact, EachSideOfATriangleIsOneEdgeInAscendingOrder) {
+  Cutter cutter = coarse_slinky();
+  const CutResult result = cutter.result();
+  const MaterialSurface& surface = result.surface;
+  const auto& copies = cutter.tet_nodes();
+  const Points& rest = result.mesh.mesh.rest();
+  sim::detail::SurfaceContact contact;
+  const std::vector<std::uint8_t> changed(copies.size(), 1);
+  contact.set_surface(surface, copies, rest, rest, changed, sim::SurfaceContactOptions{}, soft().youngs_modulus);
+  const TriangleSurface& s = surface.surface;
+  std::vector<std::array<Index, 2>> sides;
+  for (Index t = 0; t < s.num_triangles(); ++t) {
+    for (int k = 0; k < 3; ++k) {
+      const Index v = s.triangles(t, k), w = s.triangles(t, (k + 1) % 3);
+      sides.push_back({std::min(v, w), std::max(v, w)});
+    }
+  }
+  std::sort(sides.begin(), sides.end());
+  sides.erase(std::unique(sides.begin(), sides.end()), sides.end());
+  const std::vector<std::array<Index, 2>>& edges = contact.edge_list();
+  ASSERT_GT(edges.size(), 10000u);
+  EXPECT_TRUE(std::is_sorted(edges.begin(), edges.end()));
+  EXPECT_EQ(edges, sides);
+}
+
 // A piece that turns on its own, a block slit along a helix (one piece, its turns within a tet
 // of each other), turned by 0.3 radians a move about a tilted axis and squeezed along it by a
 // tenth of a thickness: no move is shortened (its ends move 50 thicknesses against each other,
