@@ -7,7 +7,8 @@
 // 11k-tet lattice, hanging under gravity, the real-time solver: nothing comes near). With
 // contact at work: bench/scenes/hand-sliced.json (libcgal-demo's hand in an 11k-tet lattice, 43k
 // surface triangles, cut by a slanted plane; the upper part slides down the cut, thousands of
-// pairs within the thickness).
+// pairs within the thickness). Cut while it runs: bench/scenes/femur-incision.json (the femur
+// incised halfway through by a scalpel over 0.8 s, the surface set again after every cut).
 //
 // Usage: tetcut_bench_contact [SCENE] [STEPS] [off|on]: both runs unless one is named (one alone,
 // for a profiler).
