@@ -243,7 +243,6 @@ void SurfaceContact::clear_surface() {
   tree_built_ = false;
   pairs_radius_ = -1;
   group_copy_.clear();
-  triangle_edges_.clear();
   group_facing_start_.clear();
   group_facing_.clear();
   two_sided_triangle_.clear();
@@ -315,13 +314,7 @@ void SurfaceContact::set_surface(const MaterialSurface& surface, std::span<const
     if (std::none_of(listing->begin() + static_cast<std::ptrdiff_t>(first), listing->end(), listed)) listing->emplace_back(copy, primitive);
   };
   Listing edge_listing, vertex_listing;
-  edge_listing.reserve(3 * F / 2 + 3 * F / 8);
-  vertex_listing.reserve(V + V / 2);
-  edges_.reserve(3 * F / 2 + 16);
-  edge_copy_.reserve(3 * F / 2 + 16);
-  edge_triangles_.reserve(3 * F);
-  edge_triangle_start_.reserve(3 * F / 2 + 17);
-  triangle_edges_.resize(F);
+  std::vector<std::array<Index, 3>> triangle_edges(F);  // per triangle its edges, side k from corner k
   struct Side {
     Index higher, triangle, k;  // the edge's other vertex, a triangle with it, and its side there
   };
@@ -358,7 +351,7 @@ void SurfaceContact::set_surface(const MaterialSurface& surface, std::span<const
       for (std::size_t j = i; j < end; ++j) {
         list_once(&edge_listing, first_listing, triangle_copy_[static_cast<std::size_t>(around[j].triangle)], e);
         edge_triangles_.push_back(around[j].triangle);
-        triangle_edges_[static_cast<std::size_t>(around[j].triangle)][static_cast<std::size_t>(around[j].k)] = e;
+        triangle_edges[static_cast<std::size_t>(around[j].triangle)][static_cast<std::size_t>(around[j].k)] = e;
       }
       edge_triangle_start_.push_back(static_cast<Index>(edge_triangles_.size()));
       length += (s.vertices.row(a) - s.vertices.row(b)).norm();
@@ -418,7 +411,7 @@ void SurfaceContact::set_surface(const MaterialSurface& surface, std::span<const
       listed.emplace_back(group_of(triangle_copy_[t]), static_cast<Index>(t));
       for (int k = 0; k < 3; ++k) {
         listed.emplace_back(group_of(vertex_copy_[static_cast<std::size_t>(c[k])]), static_cast<Index>(t));
-        listed.emplace_back(group_of(edge_copy_[static_cast<std::size_t>(triangle_edges_[t][static_cast<std::size_t>(k)])]), static_cast<Index>(t));
+        listed.emplace_back(group_of(edge_copy_[static_cast<std::size_t>(triangle_edges[t][static_cast<std::size_t>(k)])]), static_cast<Index>(t));
       }
     }
     std::sort(listed.begin(), listed.end());

@@ -644,9 +644,8 @@ class SurfaceContact {
   // Per triangle its unit normal in the material; per vertex its triangles (CSR).
   std::vector<Vec3> rest_normals_;
   std::vector<Index> vertex_triangle_start_, vertex_triangles_;
-  // Per edge its triangles, ascending (CSR); per triangle its edges, side k from corner k.
+  // Per edge its triangles, ascending (CSR).
   std::vector<Index> edge_triangle_start_, edge_triangles_;
-  std::vector<std::array<Index, 3>> triangle_edges_;
   // The Verlet list: candidates within rho_ of each other at vertex positions reference_.
   std::vector<Candidate> candidates_;
   std::vector<collision::Proximity> proximities_;
