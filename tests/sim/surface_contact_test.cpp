@@ -97,6 +97,15 @@ Cutter coarse_slinky() {
   return cutter;
 }
 
+// Contact with default settings on a cut's surface at rest, every copy changed by the cut (its
+// joins found from scratch).
+void contact_at_rest(const Cutter& cutter, const CutResult& result, sim::detail::SurfaceContact* contact) {
+  const auto& copies = cutter.tet_nodes();
+  const Points& rest = result.mesh.mesh.rest();
+  const std::vector<std::uint8_t> changed(copies.size(), 1);
+  contact->set_surface(result.surface, copies, rest, rest, changed, sim::SurfaceContactOptions{}, soft().youngs_modulus);
+}
+
 // Calls visit(v, t) for every surface vertex v and triangle t that does not have v as a corner
 // whose boxes at vertex positions `at` come within `reach` of each other.
 template <typename Visit>
@@ -725,10 +734,8 @@ TEST(SurfaceContact, APairTheCheckWouldCountIsACandidateWhateverCopyEmbedsItsCor
   const CutResult result = cutter.result();
   const MaterialSurface& surface = result.surface;
   const auto& copies = cutter.tet_nodes();
-  const Points& rest = result.mesh.mesh.rest();
   sim::detail::SurfaceContact contact;
-  const std::vector<std::uint8_t> changed(copies.size(), 1);
-  contact.set_surface(surface, copies, rest, rest, changed, sim::SurfaceContactOptions{}, soft().youngs_modulus);
+  contact_at_rest(cutter, result, &contact);
   const double dhat = contact.settings().thickness;
   Index listed_apart = 0;
   contact.candidate_pairs(&listed_apart);
@@ -747,13 +754,9 @@ TEST(SurfaceContact, APairTheCheckWouldCountIsACandidateWhateverCopyEmbedsItsCor
 TEST(SurfaceContact, EachSideOfATriangleIsOneEdgeInAscendingOrder) {
   Cutter cutter = coarse_slinky();
   const CutResult result = cutter.result();
-  const MaterialSurface& surface = result.surface;
-  const auto& copies = cutter.tet_nodes();
-  const Points& rest = result.mesh.mesh.rest();
   sim::detail::SurfaceContact contact;
-  const std::vector<std::uint8_t> changed(copies.size(), 1);
-  contact.set_surface(surface, copies, rest, rest, changed, sim::SurfaceContactOptions{}, soft().youngs_modulus);
-  const TriangleSurface& s = surface.surface;
+  contact_at_rest(cutter, result, &contact);
+  const TriangleSurface& s = result.surface.surface;
   std::vector<std::array<Index, 2>> sides;
   for (Index t = 0; t < s.num_triangles(); ++t) {
     for (int k = 0; k < 3; ++k) {
@@ -784,8 +787,7 @@ TEST(SurfaceContact, APieceTurningOnItsOwnIsNotShortenedAndItsListHolds) {
   const auto& copies = cutter.tet_nodes();
   const Points& rest = result.mesh.mesh.rest();
   sim::detail::SurfaceContact contact;
-  const std::vector<std::uint8_t> changed(copies.size(), 1);
-  contact.set_surface(surface, copies, rest, rest, changed, sim::SurfaceContactOptions{}, soft().youngs_modulus);
+  contact_at_rest(cutter, result, &contact);
   const double dhat = contact.settings().thickness;
   const Vec3 axis = Vec3(0.3, -0.2, 1).normalized(), centre(0, 0, 1);
   Points x = rest;
