@@ -10,8 +10,13 @@
 // pairs within the thickness). Cut while it runs: bench/scenes/femur-incision.json (the femur
 // incised halfway through by a scalpel over 0.8 s, the surface set again after every cut).
 //
-// Usage: tetcut_bench_contact [SCENE] [STEPS] [off|on]: both runs unless one is named (one alone,
-// for a profiler).
+// Usage: tetcut_bench_contact [SCENE] [STEPS] [off|on] [per-step]: both runs unless one is named
+// (one alone, for a profiler); with per-step, also a line for each step of each run: its wall
+// time and stages (a cut's steps carry the cut, the new surface and the simulator's remesh, the
+// contact surface set again in it), Newton and rescue iterations, and contact's parts in it (the
+// list's rebuilds, their ms, CCD, active terms, guards, joins), the candidates and pairs after it
+// (the first step's stages hold the session's set-up). The mean of a scene cut while it runs mixes
+// its cut steps' cost with its other steps', which this tells apart.
 
 #include <tetcut/scene.hpp>
 #include <tetcut/session.hpp>
@@ -32,6 +37,12 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "tetcut_bench_contact: the third argument is on or off, not '%s'\n", only.c_str());
     return 2;
   }
+  const std::string detail = argc > 4 ? argv[4] : "";
+  if (!detail.empty() && detail != "per-step") {
+    std::fprintf(stderr, "tetcut_bench_contact: the fourth argument is per-step, not '%s'\n", detail.c_str());
+    return 2;
+  }
+  const bool per_step = !detail.empty();
   Scene scene = load_scene(path);
   std::printf("scene %s, %d steps from rest\n", path.c_str(), steps);
   std::printf("%-16s %8s %8s %10s %10s %10s %12s %10s %10s %12s %10s %8s %8s %11s %9s %10s\n", "self_collision", "tets", "surface",
@@ -49,10 +60,29 @@ int main(int argc, char** argv) {
     // Per step, over the steps: where a step's time goes (contact's energies and matrices are
     // in assemble and search, its CCD in ccd).
     double newton = 0, cg = 0, assemble = 0, solve = 0, search = 0, matrix = 0;
+    if (per_step) {
+      std::printf("%-4s %5s %4s %8s %7s %7s %7s %7s %6s %6s %5s %8s %8s %7s %7s %7s %7s %10s %8s\n", on ? "on" : "off", "step", "cut",
+                  "ms", "cut", "surface", "remesh", "step", "newton", "rescue", "cg", "rebuilds", "rebuild", "ccd", "active", "guards",
+                  "joins", "candidates", "pairs");
+    }
     for (int s = 0; s < steps; ++s) {
+      using ContactState = sim::Simulator::SurfaceContactState;
+      const ContactState before = per_step ? session.simulator().surface_contact() : ContactState{};
       const bench::Clock::time_point start = bench::Clock::now();
       const SessionStep step = session.advance();
       ms.push_back(bench::ms_since(start));
+      if (per_step) {
+        const ContactState after = session.simulator().surface_contact();
+        const SceneStageSeconds& stage = step.seconds;
+        std::printf("%-4s %5d %4d %8.2f %7.2f %7.2f %7.2f %7.2f %6d %6d %5d %8d %8.2f %7.2f %7.2f %7.2f %7.2f %10d %8d\n",
+                    on ? "on" : "off", s, step.topology_changed ? 1 : 0, ms.back(), 1e3 * stage.cut, 1e3 * stage.surface,
+                    1e3 * stage.remesh, 1e3 * stage.step,
+                    step.report.newton_iterations, step.report.rescue_iterations, step.report.cg_iterations,
+                    static_cast<int>(after.rebuilds - before.rebuilds), 1e3 * (after.rebuild_seconds - before.rebuild_seconds),
+                    1e3 * (after.ccd_seconds - before.ccd_seconds), 1e3 * (after.active_seconds - before.active_seconds),
+                    1e3 * (after.guard_seconds - before.guard_seconds), 1e3 * (after.join_seconds - before.join_seconds),
+                    static_cast<int>(after.candidates), static_cast<int>(step.report.contact_pairs));
+      }
       pairs = std::max(pairs, step.report.contact_pairs);
       ccd += 1e3 * step.report.contact_seconds;
       newton += step.report.newton_iterations;
