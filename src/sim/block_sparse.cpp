@@ -12,22 +12,6 @@
 namespace tetcut::sim::detail {
 namespace {
 
-// Incidence of nodes in groups (tets or spring pairs) as compressed rows: the groups around node n
-// are group[start[n] .. start[n + 1]).
-template <std::size_t N>
-void incidence(Index num_nodes, std::span<const std::array<Index, N>> groups, std::vector<Index>* start, std::vector<Index>* group) {
-  start->assign(static_cast<std::size_t>(num_nodes) + 1, 0);
-  for (const auto& g : groups) {
-    for (const Index n : g) ++(*start)[n + 1];
-  }
-  for (Index n = 0; n < num_nodes; ++n) (*start)[n + 1] += (*start)[n];
-  group->resize(static_cast<std::size_t>(start->back()));
-  std::vector<Index> next(start->begin(), start->end() - 1);
-  for (Index i = 0; i < static_cast<Index>(groups.size()); ++i) {
-    for (const Index n : groups[i]) (*group)[next[n]++] = i;
-  }
-}
-
 // Per-thread scratch of the pattern build: a stamp per node (which row last saw it) and its
 // position in that row.
 struct RowScratch {

@@ -27,6 +27,23 @@ namespace tetcut::sim::detail {
 /// Node-range chunks for deterministic parallel loops: chunk c covers nodes [c * kChunk, ...).
 inline constexpr Index kNodeChunk = 512;
 
+/// Incidence of nodes in groups (tets, spring pairs, triangles) as compressed rows: the groups
+/// around node n are group[start[n] .. start[n + 1]), ascending (a node a group holds twice is
+/// listed twice). O(nodes + groups).
+template <std::size_t N>
+void incidence(Index num_nodes, std::span<const std::array<Index, N>> groups, std::vector<Index>* start, std::vector<Index>* group) {
+  start->assign(static_cast<std::size_t>(num_nodes) + 1, 0);
+  for (const auto& g : groups) {
+    for (const Index n : g) ++(*start)[static_cast<std::size_t>(n) + 1];
+  }
+  for (Index n = 0; n < num_nodes; ++n) (*start)[static_cast<std::size_t>(n) + 1] += (*start)[static_cast<std::size_t>(n)];
+  group->resize(static_cast<std::size_t>(start->back()));
+  std::vector<Index> next(start->begin(), start->end() - 1);
+  for (Index i = 0; i < static_cast<Index>(groups.size()); ++i) {
+    for (const Index n : groups[static_cast<std::size_t>(i)]) (*group)[static_cast<std::size_t>(next[static_cast<std::size_t>(n)]++)] = i;
+  }
+}
+
 /// Calls body(begin, end, chunk) over fixed chunks of [0, count), in parallel when there are
 /// several. The chunking is independent of the number of threads.
 template <typename Body>

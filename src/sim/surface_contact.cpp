@@ -293,18 +293,7 @@ void SurfaceContact::set_surface(const MaterialSurface& surface, std::span<const
   }
   // Each vertex's triangles, ascending (CSR): for the edges below, the guards (lag_guards) and
   // the listing of vertices. O(V + F).
-  vertex_triangle_start_.assign(V + 1, 0);
-  for (const auto& c : triangles_) {
-    for (const Index v : c) ++vertex_triangle_start_[static_cast<std::size_t>(v) + 1];
-  }
-  for (std::size_t v = 0; v < V; ++v) vertex_triangle_start_[v + 1] += vertex_triangle_start_[v];
-  vertex_triangles_.resize(3 * F);
-  {
-    std::vector<Index> fill(vertex_triangle_start_.begin(), vertex_triangle_start_.end() - 1);
-    for (std::size_t t = 0; t < F; ++t) {
-      for (const Index v : triangles_[t]) vertex_triangles_[static_cast<std::size_t>(fill[static_cast<std::size_t>(v)]++)] = static_cast<Index>(t);
-    }
-  }
+  incidence<3>(static_cast<Index>(V), triangles_, &vertex_triangle_start_, &vertex_triangles_);
   // Edges, each once, ascending by (lower, higher) vertex, each with its triangles ascending and
   // the copy of the first: found around each edge's lower vertex, among that vertex's triangles.
   // O(F) with a small sort per vertex. (A sort of all 3F sides was a third of the surface's set-up
