@@ -16,10 +16,13 @@
 //     "gravity":   [gx, gy, gz]
 //     "time":      {"dt", "duration" (required), "output_every"}
 //     "solver":    {"mode": "converged"|"real_time", "tolerance", "max_newton_iterations",
-//                   "max_cg_iterations", "reuse_hessian", "linear": "cg"|"cholesky"}   real_time: a fixed
-//                   budget per step (by default 1 Newton iteration of at most 30 CG iterations, the
-//                   matrix kept for up to 4 steps; see StepOptions::real_time). "reuse_hessian": 1
-//                   assembles every step (steadier on sliver-rich embedded meshes after cuts)
+//                   "max_cg_iterations", "reuse_hessian", "linear": "cg"|"cholesky",
+//                   "first_guess": "prediction"|"start"}   real_time: a fixed budget per step (by
+//                   default 1 Newton iteration of at most 30 CG iterations, the matrix kept for up
+//                   to 4 steps; see StepOptions::real_time). "reuse_hessian": 1 assembles every
+//                   step (steadier on sliver-rich embedded meshes after cuts); "first_guess":
+//                   where Newton starts, "prediction" by default, "start" steadier where things
+//                   collide or snap (StepOptions::first_guess)
 //     "pin":       [{"box": [...]}]                     nodes whose rest position is in the box
 //     "move":      [{"box": [...], "velocity": [...], "from", "until"}]   kinematic nodes
 //     "obstacles": [{"plane": {"point", "normal"}} | {"sphere": {"centre", "radius"}}

@@ -75,6 +75,18 @@ enum class LinearSolver {
   kCholesky,
 };
 
+/// Where Newton's method starts a dynamic step, and so where its first matrix and gradient are
+/// taken. Both end at the same step once converged; with a fixed budget of one iteration they
+/// differ (see StepOptions::first_guess).
+enum class FirstGuess {
+  /// The positions the velocities predict, x + dt v (kinematic nodes at their targets): a body in
+  /// free flight or turning is met where it is going, so one iteration follows a turn closely.
+  kPrediction,
+  /// The positions the step starts from (kinematic nodes at their targets): the linearly
+  /// implicit step of Baraff and Witkin (1998). Nothing is extrapolated, so nothing overshoots.
+  kStart,
+};
+
 struct StepOptions {
   double dt = 1.0 / 120;
   Vec3 gravity = Vec3(0, 0, -9.81);
@@ -113,12 +125,32 @@ struct StepOptions {
   /// positions overflowed (a hook let go of stretched material). 0: no valve.
   double rescue_residual = 0;
   int rescue_iterations = 0;
+  /// Where Newton starts a dynamic step. Converged steps end at the same positions either way (to
+  /// the tolerance), and the prediction is the better guess for them: a body in free flight is
+  /// there already, so its momentum comes out exact. With one iteration a step (the real-time
+  /// mode) the two trade accuracy in smooth motion against robustness where motion changes
+  /// abruptly, measured (see the README, "Where Newton starts"):
+  /// - kStart does not overshoot. On the live femur (tetcut_bench_live, 213 steps) the prediction
+  ///   of a cut piece falling onto the floor lies deep in it, and of a hook's release far past
+  ///   where the material snaps back; from there one iteration left residuals up to 0.91 and
+  ///   needed the safety valve on 37 of 60 falling steps and 23 of 77 hook steps (p99 of the
+  ///   falling steps 39-42 ms, with the Newton matrix made every step, as the valve needed there);
+  ///   from the start on none and 3, with the matrix kept for 4 steps (p99 5 ms). Surface contact
+  ///   costs less: there is no first guess to shorten by continuous collision detection, and one
+  ///   move a step for the candidate lists to cover.
+  /// - kPrediction follows smooth motion more closely, since one iteration only corrects it: the
+  ///   hanging block's sag after 30 real-time steps is 9e-6 off the converged one against 9e-4
+  ///   from the start, and the block turning at 1 rad/s (E = 1e5) keeps 64% of its kinetic energy
+  ///   after 2 s against 34% (converged steps keep 88%: tetcut_bench_sim).
+  /// So the real-time mode keeps the prediction, and scenes of cutting and contact
+  /// (examples/live-femur.json, the contact benchmarks) choose the start.
+  FirstGuess first_guess = FirstGuess::kPrediction;
 
   /// The real-time mode: a fixed budget of work per step (one Newton iteration of at most
   /// `cg_iterations` conjugate gradient iterations by default, with a fresh Newton matrix every
   /// `reuse` steps, stored in single precision), whatever the residual up to 1 (beyond it the
   /// step goes on, up to 8 more iterations: see rescue_residual); the report's `residual` says
-  /// what the budget left. See the README for what it costs in accuracy.
+  /// what the budget left. Where things collide or snap, first_guess = kStart is the steadier. See the README for what it costs in accuracy.
   static StepOptions real_time(double dt, int newton_iterations = 1, int cg_iterations = 30, int reuse = 4) {
     StepOptions o;
     o.dt = dt;

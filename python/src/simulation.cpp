@@ -72,6 +72,10 @@ void bind_sim(py::module_& root) {
       .def_readwrite("mass_damping", &Material::mass_damping)
       .def_readwrite("stiffness_damping", &Material::stiffness_damping);
 
+  py::enum_<FirstGuess>(m, "FirstGuess", "Where Newton's method starts a dynamic step (see the C++ docs).")
+      .value("prediction", FirstGuess::kPrediction)
+      .value("start", FirstGuess::kStart);
+
   py::class_<StepOptions>(m, "StepOptions", "Time step, gravity and the Newton / conjugate gradient budget.")
       .def(py::init([](double dt, py::object gravity) {
              StepOptions o;
@@ -90,7 +94,8 @@ void bind_sim(py::module_& root) {
       .def_readwrite("reuse_hessian", &StepOptions::reuse_hessian)
       .def_readwrite("single_precision_matrix", &StepOptions::single_precision_matrix)
       .def_readwrite("rescue_residual", &StepOptions::rescue_residual)
-      .def_readwrite("rescue_iterations", &StepOptions::rescue_iterations);
+      .def_readwrite("rescue_iterations", &StepOptions::rescue_iterations)
+      .def_readwrite("first_guess", &StepOptions::first_guess);
 
   py::class_<StepReport>(m, "StepReport", "What one step did.")
       .def_readonly("newton_iterations", &StepReport::newton_iterations)

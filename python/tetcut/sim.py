@@ -6,4 +6,4 @@
     report = sim.step(tetcut.sim.StepOptions(dt=0.01))
 """
 
-from ._tetcut.sim import Material, Model, Obstacle, Simulator, StepOptions, StepReport, SurfaceContactOptions  # noqa: F401
+from ._tetcut.sim import FirstGuess, Material, Model, Obstacle, Simulator, StepOptions, StepReport, SurfaceContactOptions  # noqa: F401

@@ -355,7 +355,7 @@ Scene parse_scene(std::string_view text, const std::filesystem::path& path) {
   scene.duration = time.at("duration").positive();
   if (const auto every = time.get("output_every")) scene.output_every = every->positive();
   if (const auto solver = root.get("solver")) {
-    solver->allow({"mode", "tolerance", "max_newton_iterations", "max_cg_iterations", "reuse_hessian", "linear"});
+    solver->allow({"mode", "tolerance", "max_newton_iterations", "max_cg_iterations", "reuse_hessian", "linear", "first_guess"});
     if (const auto mode = solver->get("mode"); mode && mode->choice({"converged", "real_time"}) == "real_time") {
       // The whole budget, keeping what the scene set before it (gravity; dt is real_time's own).
       const Vec3 gravity = scene.step.gravity;
@@ -366,6 +366,9 @@ Scene parse_scene(std::string_view text, const std::filesystem::path& path) {
     if (const auto v = solver->get("max_newton_iterations")) scene.step.max_newton_iterations = v->integer(1);
     if (const auto v = solver->get("max_cg_iterations")) scene.step.max_cg_iterations = v->integer(1);
     if (const auto v = solver->get("reuse_hessian")) scene.step.reuse_hessian = v->integer(1);
+    if (const auto v = solver->get("first_guess")) {
+      scene.step.first_guess = v->choice({"prediction", "start"}) == "start" ? sim::FirstGuess::kStart : sim::FirstGuess::kPrediction;
+    }
     if (const auto v = solver->get("linear")) {
       scene.step.solver = v->choice({"cg", "cholesky"}) == "cg" ? sim::LinearSolver::kConjugateGradient : sim::LinearSolver::kCholesky;
     }

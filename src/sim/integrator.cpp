@@ -311,8 +311,8 @@ void prepare_matrix(SimulatorState& s, const StepOptions& options) {
 }
 
 // The step's start: which nodes are free, the start and predicted positions, and the first guess
-// (the prediction, with constrained nodes at their targets).
-void start_step(SimulatorState& s, bool inertia, double h) {
+// (the prediction or the start, as the options say, with constrained nodes at their targets).
+void start_step(SimulatorState& s, bool inertia, double h, FirstGuess first_guess) {
   const Index n = s.num_nodes();
   // Free nodes: not constrained, and holding mass (a node in no tet has no energy at all).
   s.free.resize(static_cast<std::size_t>(n));
@@ -320,7 +320,7 @@ void start_step(SimulatorState& s, bool inertia, double h) {
   s.start = s.x;
   s.prediction = inertia ? Points(s.x + h * s.v) : s.x;
   Points& x = s.x;
-  x = s.prediction;
+  if (first_guess == FirstGuess::kPrediction) x = s.prediction;  // else x is the start already
   for (Index v = 0; v < n; ++v) {
     if (s.constraint[v] >= 0) x.row(v) = s.target.row(v);
   }
@@ -350,6 +350,12 @@ void lag_contact(SimulatorState& s, bool inertia, StepReport* report) {
     s.surface_contact.drop_friction();
   }
   s.displacement = x - s.start;
+  // A first guess at the start (FirstGuess::kStart, nothing kinematic moving) moves nothing:
+  // nothing to shorten, and no candidate list to cover a move.
+  if (s.displacement.isZero(0)) {
+    report->contact_seconds += seconds_since(contact_start);
+    return;
+  }
   const double t = s.surface_contact.max_step(s.start, s.displacement.data());
   if (t < 1) {
     x = s.start + t * s.displacement;
@@ -523,7 +529,7 @@ StepReport Simulator::minimise(const StepOptions& options, bool inertia) {
   const Clock::time_point assemble_start = Clock::now();
   prepare_matrix(s, options);
   const double h = inertia ? options.dt : 1.0;
-  start_step(s, inertia, h);
+  start_step(s, inertia, h, options.first_guess);
   lag_contact(s, inertia, &report);
   const Potential potential = step_potential(s, options, inertia, h);
   const double scale = energy_scale(s, inertia, h);

@@ -70,7 +70,10 @@ def test_the_real_time_budget_reports_its_residual():
     V, T, s, _ = hanging()
     options = sim.StepOptions.real_time(1 / 30)
     assert options.max_newton_iterations == 1 and options.max_cg_iterations == 30
+    assert options.first_guess == sim.FirstGuess.prediction
     reports = [s.step(options) for _ in range(10)]
+    options.first_guess = sim.FirstGuess.start  # Newton from where each step starts
+    reports += [s.step(options) for _ in range(10)]
     assert all(r.newton_iterations - r.rescue_iterations <= 1 for r in reports)
     assert all(np.isfinite(r.residual) for r in reports)
 

@@ -234,6 +234,18 @@ TEST(Scene, SolverModesAndScalpelsAreRead) {
   const Scene fresh = load_scene(
       write_scene(dir.path(), std::string("{") + kCube + "," + time + R"(, "solver": {"mode": "real_time", "reuse_hessian": 1}})"));
   EXPECT_EQ(fresh.step.reuse_hessian, 1);
+  // Where Newton starts: the prediction unless the scene says otherwise.
+  EXPECT_EQ(converged.step.first_guess, sim::FirstGuess::kPrediction);
+  EXPECT_EQ(real_time.step.first_guess, sim::FirstGuess::kPrediction);
+  const Scene live = load_scene(
+      write_scene(dir.path(), std::string("{") + kCube + "," + time + R"(, "solver": {"mode": "real_time", "first_guess": "start"}})"));
+  EXPECT_EQ(live.step.first_guess, sim::FirstGuess::kStart);
+  EXPECT_EQ(live.step.max_newton_iterations, 1);
+  const Scene started = load_scene(write_scene(dir.path(), std::string("{") + kCube + "," + time + R"(, "solver": {"first_guess": "start"}})"));
+  EXPECT_EQ(started.step.first_guess, sim::FirstGuess::kStart);
+  EXPECT_EQ(started.step.max_newton_iterations, sim::StepOptions{}.max_newton_iterations);
+  EXPECT_NE(load_error(std::string("{") + kCube + "," + time + R"(, "solver": {"first_guess": "guess"}})").find("solver.first_guess"),
+            std::string::npos);
   EXPECT_NE(load_error(std::string("{") + kCube + "," + time + R"(, "solver": {"reuse_hessian": 0}})").find("solver.reuse_hessian"),
             std::string::npos);
   const Scene blade = load_scene(write_scene(dir.path(), std::string("{") + kCube + "," + time +

@@ -610,22 +610,26 @@ TEST_P(Integrator, AnAnchorPullsItsPointToTheTarget) {
 
 TEST(Simulator, RealTimeBudgetIsRescuedWhereItWouldDiverge) {
   // A soft column held at its base, its top dragged 0.9 sideways by a stiff hook for a second
-  // and let go: one Newton iteration a step cannot follow the snap back, and without the safety
-  // valve the error it leaves grows step after step until the positions overflow (1e84 here).
-  // With it, the steps that would end beyond a residual of 1 take further iterations.
+  // and let go: one Newton iteration a step started from the prediction cannot follow the snap
+  // back, and without the safety valve the error it leaves grows step after step until the
+  // positions overflow (1e84 here). With it, the steps that would end beyond a residual of 1
+  // take further iterations. Started where the step starts (FirstGuess::kStart), one iteration
+  // follows it, valve or not: nothing is extrapolated past where the material turns.
   const TetMesh column = make_grid(Box{Vec3(0, 0, 0), Vec3(0.2, 0.2, 1)}, {2, 2, 10}, 5);
   Material material;
   material.youngs_modulus = 1e4;
   material.poissons_ratio = 0.4;
   const EmbeddedPoint top{column.num_tets() - 1, Eigen::Vector4d::Constant(0.25)};
-  const auto run = [&](double rescue_residual, int* rescues) {
+  const auto run = [&](double rescue_residual, int* rescues, FirstGuess first_guess = FirstGuess::kPrediction) {
     Simulator sim(column, material);
     for (Index n = 0; n < column.num_nodes(); ++n) {
       if (column.rest()(n, 2) == 0) sim.pin(n);
     }
     StepOptions options = StepOptions::real_time(1.0 / 30);
     EXPECT_EQ(options.rescue_residual, 1);
+    EXPECT_EQ(options.first_guess, FirstGuess::kPrediction);
     options.rescue_residual = rescue_residual;
+    options.first_guess = first_guess;
     const Vec3 start = sim.position(top);
     double worst = 0;
     for (int s = 0; s < 150; ++s) {
@@ -644,6 +648,9 @@ TEST(Simulator, RealTimeBudgetIsRescuedWhereItWouldDiverge) {
   EXPECT_EQ(unrescued, 0);
   EXPECT_LT(run(1, &rescued), 2);
   EXPECT_GT(rescued, 0);
+  int from_start = 0;
+  EXPECT_LT(run(0, &from_start, FirstGuess::kStart), 0.1);
+  EXPECT_EQ(from_start, 0);
 }
 
 TEST(Simulator, RejectsBadParameters) {
