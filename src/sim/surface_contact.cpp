@@ -617,17 +617,21 @@ void SurfaceContact::guard_term(const Guard& guard, ContactTerm* t) const {
 void SurfaceContact::collect_active(const Points& at) {
   const PartTimer timer(&part_seconds_.active, &part_seconds_.rebuild);
   cover(at, nullptr, 0);
-  if (active_current_ && active_at_.rows() == at.rows() && active_at_ == at) return;
+  const bool same_place = active_at_.rows() == at.rows() && active_at_ == at;
+  if (active_current_ && same_place) return;
   measure(kCounted);
   const double dhat = settings_.thickness, kappa = settings_.stiffness;
   constexpr double kInfinity = std::numeric_limits<double>::infinity();
   const auto K = static_cast<Index>(candidates_.size()), guard_count = static_cast<Index>(guards_.size());
   const Index pair_chunks = (K + kNodeChunk - 1) / kNodeChunk, guard_chunks = (guard_count + kNodeChunk - 1) / kNodeChunk;
+  // Only the guards changed since the terms were collected here: the pairs' chunks stand.
+  const bool pairs_hold = active_pairs_current_ && same_place && active_pair_chunks_ == pair_chunks;
   active_.resize(static_cast<std::size_t>(pair_chunks + guard_chunks));
-  for (std::vector<ActiveTerm>& chunk : active_) chunk.clear();
+  for (std::size_t c = pairs_hold ? static_cast<std::size_t>(pair_chunks) : 0; c < active_.size(); ++c) active_[c].clear();
   for_chunks(pair_chunks + guard_chunks, 1, [&](Index chunk, Index, Index) {
     std::vector<ActiveTerm>& out = active_[static_cast<std::size_t>(chunk)];
     if (chunk < pair_chunks) {
+      if (pairs_hold) return;
       for (Index k = chunk * kNodeChunk; k < std::min(K, (chunk + 1) * kNodeChunk); ++k) {
         const collision::Proximity& p = proximities_[k];
         if (candidates_[k].joined || candidates_[k].sutured || !(p.distance < dhat)) continue;
@@ -670,6 +674,8 @@ void SurfaceContact::collect_active(const Points& at) {
   });
   active_at_ = at;
   active_current_ = true;
+  active_pairs_current_ = true;
+  active_pair_chunks_ = pair_chunks;
 }
 
 void SurfaceContact::measure(unsigned which) {
@@ -1876,10 +1882,11 @@ void SurfaceContact::update_joins(const Points& at) {
   // The pairs that count from now on were measured here as joined pairs, and none is within dhat
   // (a join ends only then): what was measured, and the active terms at these positions, hold.
   const unsigned measured = measured_;
-  const bool active = active_current_;
+  const bool active = active_current_, active_pairs = active_pairs_current_;
   mark_joined();
   measured_ = measured;
   active_current_ = active;
+  active_pairs_current_ = active_pairs;
 }
 
 }  // namespace tetcut::sim::detail

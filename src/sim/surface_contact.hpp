@@ -365,6 +365,11 @@ class SurfaceContact {
   // Whether active_ holds the terms at node positions active_at_: the last evaluation of a step
   // is where its end counts the active pairs.
   bool active_current_ = false;
+  // Whether active_'s first active_pair_chunks_ chunks (the pairs' terms) hold at active_at_,
+  // though the guards' may not: the guards are made again at each step's start, which is where
+  // the last step's line search measured and collected the pairs (FirstGuess::kStart).
+  bool active_pairs_current_ = false;
+  Index active_pair_chunks_ = 0;
   Points active_at_;
   /// Makes the candidates cover positions `at` and, where given, the straight move from there to
   /// `move_end` (node positions), which moves near parts of the surface by at most
@@ -554,6 +559,7 @@ class SurfaceContact {
   void forget_measures() {
     measured_ = 0;
     active_current_ = false;
+    active_pairs_current_ = false;
   }
   collision::Proximity proximity(const Candidate& c, const Points& y) const;
   /// Whether a pair lies on the two sides of one cut in the material: all four corners within the

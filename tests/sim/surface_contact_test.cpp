@@ -1051,6 +1051,64 @@ TEST(SurfaceContact, NoGuardedSideSinksBehindATurningFaceBeyondTheAllowance) {
   EXPECT_GT(reached[1], 1.5 * reached[0]);
 }
 
+// A step started where the last one ended (FirstGuess::kStart) collects the terms where the last
+// line search did, after only the guards were made again: the pairs' terms are kept and the
+// guards' made afresh. The halves of a block cut across, the lower held, the upper sliding along
+// the cut under a slanted gravity for 20 real-time steps: where it ends, pairs that lay apart in
+// the material are within the thickness (counted) and the sides it still lies on press into the
+// faces they touched (active guards). Kept, the terms are those of a contact that never saw the
+// earlier guards.
+TEST(SurfaceContact, PairTermsKeptWhenOnlyTheGuardsAreMadeAgainAreTheTermsMadeAfresh) {
+  Cutter cutter(make_grid({Vec3(0, 0, 0), Vec3(1, 1, 1)}, {4, 4, 4}, 5));
+  cutter.cut(plane_square(Vec3(0.5, 0.5, 0.43), Vec3(0, 0, 1), 3));
+  const CutResult result = cutter.result();
+  ASSERT_EQ(result.mesh.num_pieces(), 2);
+  const Points& rest = result.mesh.mesh.rest();
+  sim::Simulator sim(result.mesh.mesh, soft(), result.mesh.material_fractions());
+  sim.set_contact_surface(result.surface);
+  for (Index n = 0; n < sim.num_nodes(); ++n) {
+    if (rest(n, 2) < 1e-12) sim.pin(n);
+  }
+  sim::StepOptions step = sim::StepOptions::real_time(1.0 / 30);
+  step.first_guess = sim::FirstGuess::kStart;
+  step.gravity = Vec3(1.5, 0, -9.81);
+  for (int s = 0; s < 20; ++s) sim.step(step);
+  const Points at = sim.positions();
+  EXPECT_EQ(crossings(result.surface, cutter.tet_nodes(), sim), 0);
+  struct Terms {
+    Index count = 0;
+    double energy = 0, gradient = 0;
+  };
+  const auto collect = [&](sim::detail::SurfaceContact& contact) {
+    Terms t;
+    contact.for_each_active(at, [&](const sim::detail::ContactTerm&, double e, const Vec3& g, const sim::Mat3&) {
+      ++t.count;
+      t.energy += e;
+      t.gradient += g.norm();
+    });
+    return t;
+  };
+  const std::vector<std::uint8_t> fresh(cutter.tet_nodes().size(), 1);
+  sim::detail::SurfaceContact kept, made, unguarded;
+  for (sim::detail::SurfaceContact* contact : {&kept, &made, &unguarded}) {
+    contact->set_surface(result.surface, cutter.tet_nodes(), rest, rest, fresh, sim::SurfaceContactOptions{}, soft().youngs_modulus);
+  }
+  // The earlier step's guards, made in the material; its line search's terms at `at`.
+  kept.lag_guards(rest);
+  collect(kept);
+  kept.lag_guards(at);
+  const Terms from_kept = collect(kept);
+  made.lag_guards(at);
+  const Terms from_scratch = collect(made);
+  const Terms pairs_only = collect(unguarded);
+  EXPECT_GT(pairs_only.count, 0);
+  EXPECT_GT(from_scratch.count, pairs_only.count);  // guards active too
+  EXPECT_TRUE(std::isfinite(from_scratch.energy));
+  EXPECT_EQ(from_kept.count, from_scratch.count);
+  EXPECT_NEAR(from_kept.energy, from_scratch.energy, 1e-12 * from_scratch.energy);
+  EXPECT_NEAR(from_kept.gradient, from_scratch.gradient, 1e-12 * from_scratch.gradient);
+}
+
 // A block sliding fast along another, 1.5 thicknesses above it (no pair within the thickness, so
 // no force), in the real-time solver (one Newton iteration a step), no gravity: it slides as it
 // does without contact. Each Newton move is taken in legs of the trust region's length, each leg
