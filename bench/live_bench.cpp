@@ -7,7 +7,7 @@
 //   scalpel   a horizontal blade (its edge along y, 1.2 long) swept along x through the shaft
 //             at two thirds of its height in 45 poses: the strip between poses is cut each step
 //   falling   60 steps: the freed top falls onto the floor
-//   hook      a hook on the stump pulled sideways for 30 steps, held 15, let go, 30 more
+//   hook      a hook on the stump's surface pulled sideways for 30 steps, held 15, let go, 30 more
 // Per step: the work of one tick (events, cut, the new surface and topology message after a
 // cut, the step, the frame message), its median and 99th percentile, the steps a second that
 // leaves room for, and for the cutting steps, how long from a blade pose arriving to its
@@ -117,7 +117,18 @@ int main(int argc, char** argv) {
   for (int i = 0; i < 60; ++i) tick(phases.back(), nothing);
 
   phases.emplace_back("hook");
-  const Vec3 grab_at(centre.x(), high.y(), low.z() + 0.45 * height);
+  // On the surface, as the page grabs (where the pointer's ray meets it): the surface vertex
+  // nearest a point beside the stump. The hook's target starts there and moves from there (a
+  // target set at the point beside it, 7.75 cm off the surface, yanked the stump that far in one
+  // step).
+  const Vec3 beside(centre.x(), high.y(), low.z() + 0.45 * height);
+  Vec3 grab_at = beside;
+  {
+    const tetcut::Points on_surface = session.surface_positions();
+    tetcut::Index nearest = 0;
+    (on_surface.rowwise() - beside.transpose()).rowwise().squaredNorm().minCoeff(&nearest);
+    grab_at = on_surface.row(nearest).transpose();
+  }
   int hook = -1;
   tick(phases.back(), [&] { hook = session.grab(grab_at); });
   for (int i = 1; i <= 30; ++i) tick(phases.back(), [&] { session.move_hook(hook, grab_at + Vec3(0.005 * i, 0.002 * i, 0)); });
