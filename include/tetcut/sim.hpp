@@ -131,13 +131,13 @@ struct StepOptions {
   /// mode) the two trade accuracy in smooth motion against robustness where motion changes
   /// abruptly, measured (see the README, "Where Newton starts"):
   /// - kStart does not overshoot. On the live femur (tetcut_bench_live, 213 steps) the prediction
-  ///   of a cut piece falling onto the floor lies deep in it, and of a hook's release far past
-  ///   where the material snaps back; from there one iteration left residuals up to 0.91 and
-  ///   needed the safety valve on 37 of 60 falling steps and 23 of 77 hook steps (p99 of the
-  ///   falling steps 39-42 ms, with the Newton matrix made every step, as the valve needed there);
-  ///   from the start on none and 3, with the matrix kept for 4 steps (p99 5 ms). Surface contact
-  ///   costs less: there is no first guess to shorten by continuous collision detection, and one
-  ///   move a step for the candidate lists to cover.
+  ///   of a cut piece falling onto the floor lies deep in it, and of a hook's release past where
+  ///   the material snaps back; from there one iteration left residuals up to 0.99 and needed the
+  ///   safety valve on 37 of 60 falling steps and 8 of 77 hook steps (p99 of the falling steps
+  ///   37-49 ms, with the Newton matrix made every step; kept 4 steps, 29 and 28); from the start
+  ///   on none, with the matrix kept for 4 steps (p99 6-8 ms). Surface contact costs less: there
+  ///   is no first guess to shorten by continuous collision detection, and one move a step for the
+  ///   candidate lists to cover.
   /// - kPrediction follows smooth motion more closely, since one iteration only corrects it: the
   ///   hanging block's sag after 30 real-time steps is 9e-6 off the converged one against 9e-4
   ///   from the start, and the block turning at 1 rad/s (E = 1e5) keeps 64% of its kinetic energy
