@@ -150,7 +150,8 @@ struct StepOptions {
   /// `cg_iterations` conjugate gradient iterations by default, with a fresh Newton matrix every
   /// `reuse` steps, stored in single precision), whatever the residual up to 1 (beyond it the
   /// step goes on, up to 8 more iterations: see rescue_residual); the report's `residual` says
-  /// what the budget left. Where things collide or snap, first_guess = kStart is the steadier. See the README for what it costs in accuracy.
+  /// what the budget left. See the README for what it costs in accuracy. Where things collide or
+  /// snap, first_guess = kStart is the steadier.
   static StepOptions real_time(double dt, int newton_iterations = 1, int cg_iterations = 30, int reuse = 4) {
     StepOptions o;
     o.dt = dt;

@@ -350,8 +350,8 @@ void lag_contact(SimulatorState& s, bool inertia, StepReport* report) {
     s.surface_contact.drop_friction();
   }
   s.displacement = x - s.start;
-  // A first guess at the start (FirstGuess::kStart, nothing kinematic moving) moves nothing:
-  // nothing to shorten, and no candidate list to cover a move.
+  // A first guess that moves nothing (the start, FirstGuess::kStart, with nothing kinematic
+  // moving; or a prediction at rest): nothing to shorten, and no candidate list to cover a move.
   if (s.displacement.isZero(0)) {
     report->contact_seconds += seconds_since(contact_start);
     return;
