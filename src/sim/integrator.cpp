@@ -352,11 +352,7 @@ void lag_contact(SimulatorState& s, bool inertia, StepReport* report) {
   s.displacement = x - s.start;
   // A first guess that moves nothing (the start, FirstGuess::kStart, with nothing kinematic
   // moving; or a prediction at rest): nothing to shorten, and no candidate list to cover a move.
-  if (s.displacement.isZero(0)) {
-    report->contact_seconds += seconds_since(contact_start);
-    return;
-  }
-  const double t = s.surface_contact.max_step(s.start, s.displacement.data());
+  const double t = s.displacement.isZero(0) ? 1.0 : s.surface_contact.max_step(s.start, s.displacement.data());
   if (t < 1) {
     x = s.start + t * s.displacement;
     ++report->contact_limited_steps;
