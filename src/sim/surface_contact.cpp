@@ -58,12 +58,6 @@ constexpr double kFlat = 1e-6;
 // Two guards of one vertex are on one plane when their unit normals' dot product is within this
 // of 1 (coplanar triangles of one cut polygon: equal up to the rounding of their corners).
 constexpr double kSamePlane = 1e-6;
-// ... and, where the edges' guards are thinned (lag_guards), when their planes lie within this
-// share of the allowance of each other where the guards hold a point: a fifth of the room the
-// wall leaves for a face's turn (1 - kGuardWall of the allowance). At a hundredth, the
-// neighbouring copies' faces of one cut, a milliradian apart, were rarely one plane, and the
-// thinning left 24k of the sliced ball's 30k active terms a step (20k at this share).
-constexpr double kSameOffset = 0.05;
 // A guard's vertex may lie beside its triangle by up to the triangle's size (its barycentric
 // coordinates down to -1).
 constexpr double kBeside = 1;
@@ -210,15 +204,10 @@ double friction_energy(const Vec3& u, const Vec3& n, double normal_force, double
 void SurfaceContact::lag_friction(const Points& start) {
   friction_.clear();
   if (!enabled() || !(settings_.friction > 0)) return;
-  // A term's normal is the direction its barrier pushes the first primitive, -dE / |dE| (b' < 0):
-  // r / |r| for a pair, the plane's normal for a guard. A guard's own r lies along that normal only
-  // up to the foot it holds, and is 0 where the two sides of a cut coincide: taken as the normal
-  // (as it was), it left the vertex guards without friction and gave edge guards a normal rounded
-  // from a gap of almost 0.
   for_each_active(start, [&](const ContactTerm& t, double, const Vec3& dE, const Mat3&) {
     const double force = dE.norm();
-    if (!(force > 0)) return;
-    friction_.push_back({t, -dE / force, t.r, force});
+    if (!(force > 0) || !(t.distance > 0)) return;
+    friction_.push_back({t, t.r / t.distance, t.r, force});
   });
 }
 
@@ -1558,33 +1547,18 @@ double SurfaceContact::guard_depth(const Guard& guard) const {
   return std::max(delta, guard.wall + kRecoverShare * delta);
 }
 
-std::vector<SurfaceContact::GuardedPoint> SurfaceContact::guarded_points(const Points& at) const {
+double SurfaceContact::guard_excess(const Points& at) const {
   Points y;
   place(at, &y);
-  std::vector<GuardedPoint> points;
-  points.reserve(guards_.size());
+  double excess = -std::numeric_limits<double>::infinity();
   for (const Guard& guard : guards_) {
+    const Vec3 r = guard_vector(guard, y);
     const auto& tri = triangles_[static_cast<std::size_t>(guard.triangle)];
     const Vec3 a = y.row(tri[0]).transpose(), b = y.row(tri[1]).transpose(), c = y.row(tri[2]).transpose();
     const Vec3 n = (b - a).cross(c - a).normalized();
-    const double depth = -(n.dot(guard_vector(guard, y)) - guard.zero);
-    // A vertex guard's corners are its vertex and its triangle's; an edge guard's, two edges with
-    // weights (1 - s, s, -(1 - t), -t), or the other way round, and its triangle is the second's.
-    if (guard.corner[1] == tri[0] && guard.corner[2] == tri[1] && guard.corner[3] == tri[2]) {
-      points.push_back({guard.corner[0], -1, 0.0, n, depth});
-    } else {
-      const int first = guard.w[0] + guard.w[1] > 0 ? 0 : 2;
-      points.push_back({guard.corner[static_cast<std::size_t>(first)], guard.corner[static_cast<std::size_t>(first) + 1],
-                        guard.w[static_cast<std::size_t>(first) + 1], n, depth});
-    }
+    const double allowed = guard_depth(guard);
+    excess = std::max(excess, -(n.dot(r) - guard.zero) - allowed);
   }
-  return points;
-}
-
-double SurfaceContact::guard_excess(const Points& at) const {
-  const std::vector<GuardedPoint> points = guarded_points(at);
-  double excess = -std::numeric_limits<double>::infinity();
-  for (std::size_t i = 0; i < points.size(); ++i) excess = std::max(excess, points[i].depth - guard_depth(guards_[i]));
   return excess;
 }
 
@@ -1723,7 +1697,7 @@ void SurfaceContact::lag_guards(const Points& start) {
     double inside;  // the smallest barycentric coordinate of the foot
     std::size_t k;  // the candidate
     std::array<double, 3> beta;
-    Vec3 normal, r;  // r: the vertex less its foot (its friction's start)
+    Vec3 normal;
     double zero, wall;
   };
   // Both scans below run in parallel over fixed chunks of the candidates, their findings joined
@@ -1762,8 +1736,7 @@ void SurfaceContact::lag_guards(const Points& start) {
       // side's rim), within dhat of it, it is in the other side's material: guarded from where
       // it is, it is pushed back out.
       if (!(g > -delta) && !(inside >= 0)) continue;
-      out->push_back({corner[0], inside, static_cast<std::size_t>(k), {beta_a, beta_b, beta_c}, normal,
-                      p - (beta_a * a + beta_b * b + beta_c * q), zero, guard_wall(g, delta)});
+      out->push_back({corner[0], inside, static_cast<std::size_t>(k), {beta_a, beta_b, beta_c}, normal, zero, guard_wall(g, delta)});
     }
   });
   // One guard per vertex and plane: a vertex facing a fan of coplanar triangles (the other side
@@ -1783,7 +1756,7 @@ void SurfaceContact::lag_guards(const Points& start) {
       for (std::size_t h = first_guard; h < guards_.size() && !same_plane; ++h) same_plane = guards_[h].normal.dot(found[j].normal) > 1 - kSamePlane;
       if (same_plane) continue;
       guards_.push_back({corners(candidates_[found[j].k]), {1.0, -found[j].beta[0], -found[j].beta[1], -found[j].beta[2]}, found[j].normal,
-                         found[j].zero, found[j].wall, found[j].r, found[j].r.norm(), candidates_[found[j].k].b});
+                         found[j].zero, found[j].wall, Vec3::Zero(), 0.0, candidates_[found[j].k].b});
       guard_vertex.push_back(found[j].vertex);
     }
     i = end;
@@ -1800,19 +1773,11 @@ void SurfaceContact::lag_guards(const Points& start) {
   // sliced hand, was a large part of the edge scan.)
   first_vertex_guard_.assign(vertex_nodes_.size(), -1);
   for (std::size_t i = guard_vertex.size(); i-- > 0;) first_vertex_guard_[static_cast<std::size_t>(guard_vertex[i])] = static_cast<Index>(i);
-  // One plane, as far as a guard at point x can tell: unit normals within kSamePlane, and the two
-  // planes (each through a point of its own) within kSameOffset of the allowance of each other at
-  // x (parallel faces of two sticks lying side by side are not one plane).
-  const auto same_plane_at = [&](const Vec3& x, const Vec3& normal_a, const Vec3& on_a, const Vec3& normal_b, const Vec3& on_b) {
-    return normal_a.dot(normal_b) > 1 - kSamePlane && std::abs(normal_a.dot(x - on_a) - normal_b.dot(x - on_b)) <= kSameOffset * delta;
-  };
-  const auto on_plane = [&](Index triangle) { return Vec3(y_.row(triangles_[static_cast<std::size_t>(triangle)][0]).transpose()); };
-  const auto held = [&](Index v, const Vec3& normal, const Vec3& point) {
+  const auto held = [&](Index v, const Vec3& normal) {
     const Index first_guard = first_vertex_guard_[static_cast<std::size_t>(v)];
     if (first_guard < 0) return false;
-    const Vec3 x = y_.row(v).transpose();
     for (auto i = static_cast<std::size_t>(first_guard); i < guard_vertex.size() && guard_vertex[i] == v; ++i) {
-      if (same_plane_at(x, guards_[i].normal, on_plane(guards_[i].triangle), normal, point)) return true;
+      if (guards_[i].normal.dot(normal) > 1 - kSamePlane) return true;
     }
     return false;
   };
@@ -1830,13 +1795,7 @@ void SurfaceContact::lag_guards(const Points& start) {
     }
     return any;
   };
-  const double slack_zero = -kGuardSlack * delta, usual_wall = kGuardWall * delta;
-  // Found in parallel over fixed chunks of the candidates, each chunk's kept apart (and its
-  // vector kept across calls) for the thinning below, which reads them in chunk order.
-  edge_finds_.resize(static_cast<std::size_t>((K + kNodeChunk - 1) / kNodeChunk));
-  for_chunks(K, kNodeChunk, [&](Index begin, Index end, Index chunk) {
-    std::vector<EdgeGuardFind>* out = &edge_finds_[static_cast<std::size_t>(chunk)];
-    out->clear();
+  append_chunks(K, kNodeChunk, &guards_, [&](Index begin, Index end, std::vector<Guard>* out) {
     for (Index k = begin; k < end; ++k) {
       const Candidate& c = candidates_[k];
       if (!c.joined || c.sutured || !c.edges || !(proximities_[k].distance < dhat)) continue;
@@ -1857,8 +1816,7 @@ void SurfaceContact::lag_guards(const Points& start) {
           const Vec3 normal = unit_normal(y_.row(tri[0]).transpose(), y_.row(tri[1]).transpose(), y_.row(tri[2]).transpose(), dhat);
           if (normal.isZero()) continue;
           // Both ends held to this plane by their own guards hold the edge (g is linear along it).
-          const Vec3 point = y_.row(tri[0]).transpose();
-          if (held(corner[static_cast<std::size_t>(first)], normal, point) && held(corner[static_cast<std::size_t>(first) + 1], normal, point)) continue;
+          if (held(corner[static_cast<std::size_t>(first)], normal) && held(corner[static_cast<std::size_t>(first) + 1], normal)) continue;
           collision::Proximity foot = p;
           for (double& w : foot.w) w *= sign;
           const double zero = guard_zero(corner, foot.w, t);
@@ -1873,85 +1831,11 @@ void SurfaceContact::lag_guards(const Points& start) {
           // outside its material) it passed nothing.
           if (!(g > -delta) && !(p.free == 2 && behind_faces(edge, sign * p.r))) continue;
           // Its friction's start: r turned as the guard's (from the faces to the first edge).
-          EdgeGuardFind& find = out->emplace_back();
-          find.guard = {corner, foot.w, normal, zero, guard_wall(g, delta), sign * p.r, p.distance, t};
-          if (!thin_edge_guards_ || zero != slack_zero || find.guard.wall != usual_wall) continue;
-          const auto f = static_cast<std::size_t>(first);
-          if (foot.w[f] == 0 || foot.w[f + 1] == 0) {
-            find.end = corner[foot.w[f] == 0 ? f + 1 : f];
-            // Held by a vertex guard of its own on this plane: nothing to add.
-            if (held(find.end, normal, point)) out->pop_back();
-          } else {
-            find.inside = first == 0 ? c.a : c.b;
-            find.s = foot.w[f + 1];
-          }
+          out->push_back({corner, foot.w, normal, zero, guard_wall(g, delta), sign * p.r, p.distance, t});
         }
       }
     }
   });
-  // Thinning. An edge guard whose closest point is an end of its edge holds that vertex to the
-  // face's plane: one guard per vertex and plane does that (as for the vertex guards above), and
-  // a vertex guard on the plane does it already. Guards at points inside one edge against one
-  // plane hold a side whose depth behind that plane is linear along the edge: the two outermost
-  // hold the ones between. Both keep the guard first met (the order found: the result does not
-  // depend on the number of threads). The sliced ball's active terms a step fell from 30k to 20k,
-  // the incised femur's from 5.0k to 2.1k. O(edge guards), serial.
-  thin_vertex_head_.resize(vertex_nodes_.size(), -1);
-  thin_edge_head_.resize(edges_.size(), -1);
-  thin_planes_.clear();
-  thin_plane_of_.clear();
-  // The plane of a find's guard, as a plane of the chain from `head` at the points xs (the
-  // vertex, or both ends of the edge: the planes' offsets differ along it linearly).
-  const auto same_plane = [&](Index head, const Vec3& normal, const Vec3& point, std::span<const Vec3> xs) {
-    for (Index h = head; h >= 0; h = thin_planes_[static_cast<std::size_t>(h)].next) {
-      const ThinPlane& p = thin_planes_[static_cast<std::size_t>(h)];
-      if (std::all_of(xs.begin(), xs.end(), [&](const Vec3& x) { return same_plane_at(x, p.normal, p.point, normal, point); })) return h;
-    }
-    return Index{-1};
-  };
-  const auto new_plane = [&](Index* head, const Vec3& normal, const Vec3& point, double s) {
-    thin_planes_.push_back({normal, point, *head, s, s, static_cast<Index>(thin_plane_of_.size()), static_cast<Index>(thin_plane_of_.size())});
-    *head = static_cast<Index>(thin_planes_.size() - 1);
-    return *head;
-  };
-  for (const std::vector<EdgeGuardFind>& chunk : edge_finds_) {
-    for (const EdgeGuardFind& find : chunk) {
-      const Vec3& normal = find.guard.normal;
-      const Vec3 point = on_plane(find.guard.triangle);
-      Index plane = -1;  // -1: kept alone; -2: dropped
-      if (find.end >= 0) {
-        Index& head = thin_vertex_head_[static_cast<std::size_t>(find.end)];
-        const std::array<Vec3, 1> at{Vec3(y_.row(find.end).transpose())};
-        plane = same_plane(head, normal, point, at) >= 0 ? -2 : new_plane(&head, normal, point, 0);
-      } else if (find.inside >= 0) {
-        Index& head = thin_edge_head_[static_cast<std::size_t>(find.inside)];
-        const auto& edge = edges_[static_cast<std::size_t>(find.inside)];
-        const std::array<Vec3, 2> at{Vec3(y_.row(edge[0]).transpose()), Vec3(y_.row(edge[1]).transpose())};
-        plane = same_plane(head, normal, point, at);
-        if (plane < 0) {
-          plane = new_plane(&head, normal, point, find.s);
-        } else {
-          ThinPlane& p = thin_planes_[static_cast<std::size_t>(plane)];
-          const auto i = static_cast<Index>(thin_plane_of_.size());
-          if (find.s < p.least_s) p.least_s = find.s, p.least = i;
-          if (find.s > p.largest_s) p.largest_s = find.s, p.largest = i;
-        }
-      }
-      thin_plane_of_.push_back(plane);
-    }
-  }
-  Index i = 0;
-  for (const std::vector<EdgeGuardFind>& chunk : edge_finds_) {
-    for (const EdgeGuardFind& find : chunk) {
-      const Index plane = thin_plane_of_[static_cast<std::size_t>(i)];
-      const bool kept = plane == -1 || (plane >= 0 && (find.inside < 0 || thin_planes_[static_cast<std::size_t>(plane)].least == i ||
-                                                       thin_planes_[static_cast<std::size_t>(plane)].largest == i));
-      if (kept) guards_.push_back(find.guard);
-      if (find.end >= 0) thin_vertex_head_[static_cast<std::size_t>(find.end)] = -1;
-      if (find.inside >= 0) thin_edge_head_[static_cast<std::size_t>(find.inside)] = -1;
-      ++i;
-    }
-  }
   index_guard_triangles();
 }
 

@@ -188,7 +188,7 @@ double friction_energy(const Vec3& u, const Vec3& n, double normal_force, double
                        Mat3* hessian = nullptr);
 
 /// One pair as a soft constraint: r = sum_i coefficients[i] x_{nodes[i]} (count distinct nodes),
-/// with r and |r| where it was made (lagged friction's start). Kept to what its readers
+/// with r and |r| where it was made (lagged friction's normal and start). Kept to what its readers
 /// need (it held the whole Proximity, 104 bytes more): every evaluation writes thousands of them
 /// on the sliced hand, and reads them again.
 struct ContactTerm {
@@ -276,26 +276,12 @@ class SurfaceContact {
   /// material (see "Guards" above). O(candidates), in parallel.
   void lag_guards(const Points& start);
   Index num_guards() const { return static_cast<Index>(guards_.size()); }
-  /// For tests: whether lag_guards thins the edge guards (on by default; see there). Off, every
-  /// edge guard the rule finds is made.
-  void set_edge_guard_thinning(bool on) { thin_edge_guards_ = on; }
   /// For tests: how far the deepest guarded vertex or edge lies behind its triangle's own plane
   /// (not the plane its guard holds from the step's start) at node positions `at`, beyond what
   /// its guard allows (guard_depth: the allowance, or, where a guard was made behind its wall to
   /// push a side back out, a hair beyond that wall). At most 0 while every guard holds.
   /// O(V + guards).
   double guard_excess(const Points& at) const;
-  /// For tests: per guard, the point it holds (a vertex: `a`, with `b` = -1; a point of an edge:
-  /// (1 - s) a + s b), the unit normal of its triangle and how deep that point lies behind the
-  /// triangle's own plane at node positions `at`, less the guard's zero (what guard_excess takes
-  /// before the allowance). O(V + guards).
-  struct GuardedPoint {
-    Index a, b;
-    double s;
-    Vec3 normal;
-    double depth;
-  };
-  std::vector<GuardedPoint> guarded_points(const Points& at) const;
   /// Whether the last max_step ended its move where the guards' planes, held since they were
   /// made, allowed (guards_share): the caller may make them again where it stands (lag_guards)
   /// before its next Newton iteration, so that a step in which faces turn and slide far against
@@ -637,7 +623,8 @@ class SurfaceContact {
     // How far behind its zero the barrier's wall stands: 0.75 of the allowance, or a little deeper
     // than a pair found behind that at the step's start (see lag_guards).
     double wall;
-    // Its r and |r| at the step's start (its lagged friction's start).
+    // An edge guard's r and distance at the step's start (its lagged friction's normal and
+    // start); a vertex guard's are zero (no friction).
     Vec3 start_r;
     double start_distance;
     Index triangle;  // whose plane it holds (a vertex guard's triangle, or a face around an edge guard's second edge)
@@ -658,28 +645,6 @@ class SurfaceContact {
   static constexpr double kGuardSlack = 1e-6;
   std::vector<Guard> guards_;
   std::vector<Index> first_vertex_guard_;  // lag_guards' scratch: per vertex its first guard, or -1
-  // An edge guard as lag_guards finds it, with what it holds for the thinning: an end of its
-  // edge (`end`, the vertex: the closest point is there), or a point inside it (`inside`, its
-  // edge, and s, where along it), or, made with a zero or a wall of its own, itself alone.
-  struct EdgeGuardFind {
-    Guard guard;
-    Index end = -1, inside = -1;
-    double s = 0;
-  };
-  std::vector<std::vector<EdgeGuardFind>> edge_finds_;  // per chunk of the candidates
-  // The thinning's planes: per vertex (the ends held to it) or per edge (the points inside it
-  // held to it, with the least and the largest s and which finds hold them), chained per vertex
-  // and per edge from the heads (all -1 between calls); and per find its plane (-1: kept alone,
-  // -2: dropped).
-  struct ThinPlane {
-    Vec3 normal, point;  // its unit normal, and a point of it (its guard's triangle's first corner)
-    Index next;
-    double least_s, largest_s;
-    Index least, largest;
-  };
-  std::vector<ThinPlane> thin_planes_;
-  bool thin_edge_guards_ = true;
-  std::vector<Index> thin_vertex_head_, thin_edge_head_, thin_plane_of_;
   bool sutures_changed_ = false;
   Points rest_y_;
   // Per triangle its unit normal in the material; per vertex its triangles (CSR).

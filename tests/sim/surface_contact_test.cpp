@@ -634,7 +634,7 @@ TEST(SurfaceContact, NoGuardPushesAtRest) {
   Index pairs = 0, with_guards = 0;
   const double pairs_energy = active(&pairs);
   contact.lag_guards(tilted);
-  EXPECT_GT(contact.num_guards(), 5000);  // 8.7k (21k before the edge guards were thinned)
+  EXPECT_GT(contact.num_guards(), 10000);
   EXPECT_EQ(active(&with_guards), pairs_energy);
   EXPECT_EQ(with_guards, pairs);
 }
@@ -1049,86 +1049,6 @@ TEST(SurfaceContact, NoGuardedSideSinksBehindATurningFaceBeyondTheAllowance) {
   }
   // Made again, the guards' planes turn with the faces, and the moves go further.
   EXPECT_GT(reached[1], 1.5 * reached[0]);
-}
-
-// Checks that the edge guards thinned (lag_guards) hold what they leave out: with the guards made
-// at `positions(press)` for the first press, and at each press, each point that every edge guard
-// would hold (set_edge_guard_thinning(false)) lies no deeper behind its plane than a kept guard's
-// point of that vertex on that plane, or than the deeper of the kept points of that edge on it.
-// Returns how many points at the ends of edges and inside them were checked.
-template <typename Positions>
-std::pair<Index, Index> expect_thinned_guards_hold(const Cutter& cutter, const CutResult& result, const Positions& positions,
-                                                   const std::vector<double>& presses, double dhat) {
-  const Points& rest = result.mesh.mesh.rest();
-  sim::SurfaceContactOptions options;
-  options.thickness = dhat;
-  const std::vector<std::uint8_t> fresh(cutter.tet_nodes().size(), 1);  // the cuts are new: their sides are joined
-  const auto made = [&](bool thin) {
-    auto contact = std::make_unique<sim::detail::SurfaceContact>();
-    contact->set_surface(result.surface, cutter.tet_nodes(), rest, rest, fresh, options, soft().youngs_modulus);
-    contact->set_edge_guard_thinning(thin);
-    contact->lag_guards(positions(presses.front()));
-    return contact;
-  };
-  const auto all = made(false), thinned = made(true);
-  EXPECT_LT(thinned->num_guards(), all->num_guards());
-  using Point = sim::detail::SurfaceContact::GuardedPoint;
-  // A point at an end of its edge is that vertex.
-  const auto vertex_of = [](const Point& p) { return p.b < 0 || p.s == 0 ? p.a : p.s == 1 ? p.b : Index{-1}; };
-  Index at_ends = 0, inside = 0;
-  for (const double press : presses) {
-    const Points at = positions(press);
-    const std::vector<Point> kept = thinned->guarded_points(at);
-    double deepest = -1;
-    for (const Point& p : all->guarded_points(at)) {
-      if (p.b < 0) continue;  // a vertex guard: made alike with or without thinning
-      double bound = -std::numeric_limits<double>::infinity();
-      const Index vertex = vertex_of(p);
-      for (const Point& q : kept) {
-        if (!(p.normal.dot(q.normal) > 1 - 1e-6)) continue;
-        if (vertex >= 0 ? vertex_of(q) == vertex : q.b >= 0 && std::minmax(q.a, q.b) == std::minmax(p.a, p.b)) bound = std::max(bound, q.depth);
-      }
-      EXPECT_LE(p.depth, bound + 1e-9 * dhat) << "press " << press << ", edge (" << p.a << ", " << p.b << ") at " << p.s;
-      ++(vertex >= 0 ? at_ends : inside);
-      deepest = std::max(deepest, p.depth);
-    }
-    EXPECT_GT(deepest, 0) << "press " << press;  // some side is pressed in
-  }
-  return {at_ends, inside};
-}
-
-// The edge guards are thinned (lag_guards): one whose closest point is an end of its edge is left
-// out where a guard of that vertex holds the face's plane already, and of those at points inside
-// one edge against one plane only the two outermost are kept (the side's depth behind the plane is
-// linear along the edge). What they leave out, the guards kept hold: the halves of a block cut
-// across, joined, both bent into one wave (the cut's faces turned against each other by about
-// 0.02 radians from copy to copy, each copy's in one plane), the upper slid along the cut (so that
-// the sides' edges cross and their kinks do not meet) and pressed onto the lower.
-TEST(SurfaceContact, ThinnedEdgeGuardsHoldWhatTheyLeaveOut) {
-  const double dhat = 0.01, delta = 0.1 * dhat, cut = 0.43, wave = 0.002;
-  Cutter cutter(make_grid({Vec3(0, 0, 0), Vec3(1, 1, 1)}, {4, 4, 4}, 5));
-  cutter.cut(plane_square(Vec3(0.5, 0.5, cut), Vec3(0, 0, 1), 3));
-  const CutResult result = cutter.result();
-  ASSERT_EQ(result.mesh.num_pieces(), 2);
-  const Points& rest = result.mesh.mesh.rest();
-  std::vector<std::uint8_t> upper(static_cast<std::size_t>(rest.rows()), 0);
-  for (std::size_t copy = 0; copy < cutter.tet_nodes().size(); ++copy) {
-    for (const Index n : cutter.tet_nodes()[copy]) upper[static_cast<std::size_t>(n)] = result.mesh.tet_piece[copy] == 0 ? 1 : 0;
-  }
-  // Every node raised by the wave; the upper half's slid and lowered by `press` as well.
-  const auto bent = [&](double press) {
-    Points x = rest;
-    for (Index n = 0; n < rest.rows(); ++n) {
-      const Vec3 p = rest.row(n).transpose();
-      x(n, 2) += wave * std::sin(2 * std::numbers::pi * p.x()) * std::sin(2 * std::numbers::pi * p.y());
-      if (upper[static_cast<std::size_t>(n)]) x.row(n) += Vec3(0.0137, 0.0071, -press).transpose();
-    }
-    return x;
-  };
-  const auto [at_ends, inside] = expect_thinned_guards_hold(cutter, result, bent, {0.5 * delta, delta, 1.5 * delta, 2 * delta}, dhat);
-  // Both kinds were looked at (3.2k points at the ends of edges, 7.5k inside, in 4 presses).
-  EXPECT_GT(at_ends, 1000);
-  EXPECT_GT(inside, 1000);
 }
 
 // A step started where the last one ended (FirstGuess::kStart) collects the terms where the last
