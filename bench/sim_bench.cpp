@@ -137,14 +137,9 @@ void turning(const Block& block, double youngs_modulus) {
     tetcut::Points v = tetcut::Points::Zero(sim.num_nodes(), 3);
     for (Index n = 0; n < sim.num_nodes(); ++n) v.row(n) = Vec3(0, 0, 1).cross(sim.positions().row(n).transpose() - Vec3(0.5, 0.5, 1)).transpose();
     sim.set_velocities(v);
-    const auto kinetic = [&] {
-      double sum = 0;
-      for (Index n = 0; n < sim.num_nodes(); ++n) sum += 0.5 * sim.masses()[n] * sim.velocities().row(n).squaredNorm();
-      return sum;
-    };
-    const double before = kinetic();
+    const double before = sim.kinetic_energy();
     for (int s = 0; s < 60; ++s) sim.step(options);
-    std::printf(" %.3f |", kinetic() / before);
+    std::printf(" %.3f |", sim.kinetic_energy() / before);
   }
   std::printf("\n");
 }

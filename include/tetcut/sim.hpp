@@ -373,6 +373,8 @@ class Simulator {
   Points elastic_gradient() const;
   /// Total momentum sum m v.
   Vec3 momentum() const;
+  /// Kinetic energy sum m |v|^2 / 2 (as ClothSimulator::kinetic_energy).
+  double kinetic_energy() const;
 
  private:
   StepReport minimise(const StepOptions& options, bool inertia);

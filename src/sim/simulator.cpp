@@ -395,6 +395,12 @@ Points Simulator::elastic_gradient() const {
 
 Vec3 Simulator::momentum() const { return (state_->mass.asDiagonal() * state_->v).colwise().sum().transpose(); }
 
+double Simulator::kinetic_energy() const {
+  double e = 0;
+  for (Index n = 0; n < num_nodes(); ++n) e += 0.5 * state_->mass[n] * state_->v.row(n).squaredNorm();
+  return e;
+}
+
 std::vector<std::pair<EmbeddedPoint, EmbeddedPoint>> incision_pairs(const MaterialSurface& surface, std::int64_t first_cut,
                                                                     std::int64_t end_cut) {
   // Vertices on the chosen cut triangles, grouped by rest position up to its rounding (two
