@@ -56,8 +56,13 @@ constexpr double kMaxTurn = 0.5;
 // rounded corners give them a normal in any direction.
 constexpr double kFlat = 1e-6;
 // Two guards of one vertex are on one plane when their unit normals' dot product is within this
-// of 1 (coplanar triangles of one cut polygon: equal up to the rounding of their corners).
+// of 1 (coplanar triangles of one cut polygon: equal up to the rounding of their corners), and
+// the vertex's heights over the two planes agree within kSameHeight of the allowance. The normals
+// alone made parallel faces of two sticks side by side one plane: a vertex guarded on one of them
+// counted as held on the other, though that one may lie allowances higher or lower (see held in
+// lag_guards).
 constexpr double kSamePlane = 1e-6;
+constexpr double kSameHeight = 0.05;
 // A guard's vertex may lie beside its triangle by up to the triangle's size (its barycentric
 // coordinates down to -1).
 constexpr double kBeside = 1;
@@ -1698,6 +1703,7 @@ void SurfaceContact::lag_guards(const Points& start) {
     std::size_t k;  // the candidate
     std::array<double, 3> beta;
     Vec3 normal;
+    double height;  // the vertex's height over the triangle's plane (along normal)
     double zero, wall;
   };
   // Both scans below run in parallel over fixed chunks of the candidates, their findings joined
@@ -1736,14 +1742,21 @@ void SurfaceContact::lag_guards(const Points& start) {
       // side's rim), within dhat of it, it is in the other side's material: guarded from where
       // it is, it is pushed back out.
       if (!(g > -delta) && !(inside >= 0)) continue;
-      out->push_back({corner[0], inside, static_cast<std::size_t>(k), {beta_a, beta_b, beta_c}, normal, zero, guard_wall(g, delta)});
+      out->push_back({corner[0], inside, static_cast<std::size_t>(k), {beta_a, beta_b, beta_c}, normal, g + zero, zero, guard_wall(g, delta)});
     }
   });
   // One guard per vertex and plane: a vertex facing a fan of coplanar triangles (the other side
   // of its cut polygon) needs one, by the triangle it lies most inside; its planes differ only
   // where cuts or faces meet. Fewer terms, the same constraint: g is the same on coplanar
-  // triangles.
-  std::vector<Index> guard_vertex;  // per vertex guard, its vertex (ascending)
+  // triangles. Planes are one where their normals agree and the vertex stands at the same height
+  // over both (kSameHeight): parallel faces at two heights (two sticks side by side under a
+  // third) are two planes.
+  const double same_height = kSameHeight * delta;
+  const auto one_plane = [&](const Vec3& normal_a, double height_a, const Vec3& normal_b, double height_b) {
+    return normal_a.dot(normal_b) > 1 - kSamePlane && std::abs(height_a - height_b) < same_height;
+  };
+  std::vector<Index> guard_vertex;   // per vertex guard, its vertex (ascending)
+  std::vector<double> guard_height;  // per vertex guard, its vertex's height over its plane
   std::sort(found.begin(), found.end(), [](const Found& x, const Found& y) {
     return x.vertex != y.vertex ? x.vertex < y.vertex : x.inside != y.inside ? x.inside > y.inside : x.k < y.k;
   });
@@ -1753,11 +1766,14 @@ void SurfaceContact::lag_guards(const Points& start) {
     const std::size_t first_guard = guards_.size();
     for (std::size_t j = i; j < end; ++j) {
       bool same_plane = false;
-      for (std::size_t h = first_guard; h < guards_.size() && !same_plane; ++h) same_plane = guards_[h].normal.dot(found[j].normal) > 1 - kSamePlane;
+      for (std::size_t h = first_guard; h < guards_.size() && !same_plane; ++h) {
+        same_plane = one_plane(guards_[h].normal, guard_height[h], found[j].normal, found[j].height);
+      }
       if (same_plane) continue;
       guards_.push_back({corners(candidates_[found[j].k]), {1.0, -found[j].beta[0], -found[j].beta[1], -found[j].beta[2]}, found[j].normal,
                          found[j].zero, found[j].wall, Vec3::Zero(), 0.0, candidates_[found[j].k].b});
       guard_vertex.push_back(found[j].vertex);
+      guard_height.push_back(found[j].height);
     }
     i = end;
   }
@@ -1773,11 +1789,16 @@ void SurfaceContact::lag_guards(const Points& start) {
   // sliced hand, was a large part of the edge scan.)
   first_vertex_guard_.assign(vertex_nodes_.size(), -1);
   for (std::size_t i = guard_vertex.size(); i-- > 0;) first_vertex_guard_[static_cast<std::size_t>(guard_vertex[i])] = static_cast<Index>(i);
-  const auto held = [&](Index v, const Vec3& normal) {
+  // On the plane with this normal through point `on`: the same plane as a guard's where the
+  // vertex stands as high over both (one_plane). By normals alone, an edge of one stick lying
+  // across two others side by side, its ends guarded on their parallel faces at two heights,
+  // counted as held on both planes, and the edge between sank behind the higher one unguarded.
+  const auto held = [&](Index v, const Vec3& normal, const Vec3& on) {
     const Index first_guard = first_vertex_guard_[static_cast<std::size_t>(v)];
     if (first_guard < 0) return false;
+    const double height = normal.dot(y_.row(v).transpose() - on);
     for (auto i = static_cast<std::size_t>(first_guard); i < guard_vertex.size() && guard_vertex[i] == v; ++i) {
-      if (guards_[i].normal.dot(normal) > 1 - kSamePlane) return true;
+      if (one_plane(guards_[i].normal, guard_height[i], normal, height)) return true;
     }
     return false;
   };
@@ -1816,7 +1837,8 @@ void SurfaceContact::lag_guards(const Points& start) {
           const Vec3 normal = unit_normal(y_.row(tri[0]).transpose(), y_.row(tri[1]).transpose(), y_.row(tri[2]).transpose(), dhat);
           if (normal.isZero()) continue;
           // Both ends held to this plane by their own guards hold the edge (g is linear along it).
-          if (held(corner[static_cast<std::size_t>(first)], normal) && held(corner[static_cast<std::size_t>(first) + 1], normal)) continue;
+          const Vec3 on = y_.row(tri[0]).transpose();
+          if (held(corner[static_cast<std::size_t>(first)], normal, on) && held(corner[static_cast<std::size_t>(first) + 1], normal, on)) continue;
           collision::Proximity foot = p;
           for (double& w : foot.w) w *= sign;
           const double zero = guard_zero(corner, foot.w, t);
