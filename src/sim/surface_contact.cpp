@@ -209,10 +209,16 @@ double friction_energy(const Vec3& u, const Vec3& n, double normal_force, double
 void SurfaceContact::lag_friction(const Points& start) {
   friction_.clear();
   if (!enabled() || !(settings_.friction > 0)) return;
+  // A term's normal is the direction its barrier pushes the first primitive, -dE / |dE| (b' < 0):
+  // r / |r| for a pair, the plane's normal for a guard. Taken from a guard's own r, it left the
+  // vertex guards without friction (their r was stored as 0) and gave edge guards a normal
+  // rounded from a gap of almost 0 between the coincident sides of a cut: a block's upper half
+  // resting on its lower half across their cut, tilted 20 degrees with mu = 0.5, slid 4.5 cm in
+  // 0.3 s (5 mm now, the smoothing's creep).
   for_each_active(start, [&](const ContactTerm& t, double, const Vec3& dE, const Mat3&) {
     const double force = dE.norm();
-    if (!(force > 0) || !(t.distance > 0)) return;
-    friction_.push_back({t, t.r / t.distance, t.r, force});
+    if (!(force > 0)) return;
+    friction_.push_back({t, -dE / force, t.r, force});
   });
 }
 
@@ -1702,8 +1708,8 @@ void SurfaceContact::lag_guards(const Points& start) {
     double inside;  // the smallest barycentric coordinate of the foot
     std::size_t k;  // the candidate
     std::array<double, 3> beta;
-    Vec3 normal;
-    double height;  // the vertex's height over the triangle's plane (along normal)
+    Vec3 normal, r;  // r: the vertex less its foot (its friction's start)
+    double height;   // the vertex's height over the triangle's plane (along normal)
     double zero, wall;
   };
   // Both scans below run in parallel over fixed chunks of the candidates, their findings joined
@@ -1742,7 +1748,8 @@ void SurfaceContact::lag_guards(const Points& start) {
       // side's rim), within dhat of it, it is in the other side's material: guarded from where
       // it is, it is pushed back out.
       if (!(g > -delta) && !(inside >= 0)) continue;
-      out->push_back({corner[0], inside, static_cast<std::size_t>(k), {beta_a, beta_b, beta_c}, normal, g + zero, zero, guard_wall(g, delta)});
+      out->push_back({corner[0], inside, static_cast<std::size_t>(k), {beta_a, beta_b, beta_c}, normal,
+                      p - (beta_a * a + beta_b * b + beta_c * q), g + zero, zero, guard_wall(g, delta)});
     }
   });
   // One guard per vertex and plane: a vertex facing a fan of coplanar triangles (the other side
@@ -1771,7 +1778,7 @@ void SurfaceContact::lag_guards(const Points& start) {
       }
       if (same_plane) continue;
       guards_.push_back({corners(candidates_[found[j].k]), {1.0, -found[j].beta[0], -found[j].beta[1], -found[j].beta[2]}, found[j].normal,
-                         found[j].zero, found[j].wall, Vec3::Zero(), 0.0, candidates_[found[j].k].b});
+                         found[j].zero, found[j].wall, found[j].r, found[j].r.norm(), candidates_[found[j].k].b});
       guard_vertex.push_back(found[j].vertex);
       guard_height.push_back(found[j].height);
     }

@@ -188,7 +188,7 @@ double friction_energy(const Vec3& u, const Vec3& n, double normal_force, double
                        Mat3* hessian = nullptr);
 
 /// One pair as a soft constraint: r = sum_i coefficients[i] x_{nodes[i]} (count distinct nodes),
-/// with r and |r| where it was made (lagged friction's normal and start). Kept to what its readers
+/// with r and |r| where it was made (lagged friction's start). Kept to what its readers
 /// need (it held the whole Proximity, 104 bytes more): every evaluation writes thousands of them
 /// on the sliced hand, and reads them again.
 struct ContactTerm {
@@ -254,8 +254,9 @@ class SurfaceContact {
   /// their planes, held from the step's start, allow (guards_share).
   double max_step(const Points& from, const double* direction);
 
-  /// Friction of the step starting at `start`: the pairs in contact there, each with its normal
-  /// and normal force, held for the step (lagged). None when the friction coefficient is 0.
+  /// Friction of the step starting at `start`: the pairs in contact there and the guards pressed
+  /// (the two sides of a cut), each with its normal (the direction its barrier pushes) and normal
+  /// force, held for the step (lagged). None when the friction coefficient is 0.
   void lag_friction(const Points& start);
   void drop_friction() { friction_.clear(); }
   /// Calls visit(term, energy, dE/du, d2E/du2) for each lagged pair at positions `at` (u the
@@ -623,8 +624,8 @@ class SurfaceContact {
     // How far behind its zero the barrier's wall stands: 0.75 of the allowance, or a little deeper
     // than a pair found behind that at the step's start (see lag_guards).
     double wall;
-    // An edge guard's r and distance at the step's start (its lagged friction's normal and
-    // start); a vertex guard's are zero (no friction).
+    // The guard's r and its length at the step's start (its lagged friction's start; the
+    // friction's normal is the plane's).
     Vec3 start_r;
     double start_distance;
     Index triangle;  // whose plane it holds (a vertex guard's triangle, or a face around an edge guard's second edge)
