@@ -1429,6 +1429,154 @@ TEST(SurfaceContact, FrictionHoldsABlockThrownAcrossAnother) {
   EXPECT_LT(held_slip, 0.1 * free_slip);  // measured: 0.37 m against 0.013 m
 }
 
+// Four pieces of a block: cut across at z = zc, the lower half cut in two at x = xc (B and C), the
+// upper in two at y = yc (A and A2), each vertical cut ending on the horizontal one, so that the
+// four meet at one corner on the cut. C is lowered by 9 allowances and A2 raised by 5, and the
+// upper half slid along the cut by 0.009 (within the thickness, so its sides stay joined): A's rim
+// edge from its corner vertex, over B, to its next vertex, over C, lies across B's and C's
+// parallel faces, and B's rim edge from its corner vertex, under A, to its next, under A2, across
+// A's and A2's; each end is guarded on the face it lies on. A is tilted down towards the point
+// where the two edges cross, which goes down 1.45 times as far as any vertex A's face is held at
+// on B's plane by a vertex guard (A's over B, B's under A). Parallel faces at two heights are two
+// planes: an end guarded on C's face does not hold A's rim edge on B's plane, nor one guarded on
+// A2's face B's rim edge on A's, so the guards made at the start hold the crossing; by normals
+// alone none did. (The moves max_step allows stop at the wall either way: once a move is held back
+// and the guards are made again, A has turned, and its face is no longer parallel to A2's.)
+TEST(SurfaceContact, AnEdgeAcrossParallelFacesAtTwoHeightsIsHeldOnEach) {
+  const double dhat = 0.01, zc = 0.43, xc = 0.6, yc = 0.5071, slide = 0.009;
+  // A rectangle by its corners in order (given exactly: a cut that ends on another must meet it).
+  const auto rectangle = [](const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
+    TriangleSurface r;
+    r.vertices.resize(4, 3);
+    r.vertices << a.transpose(), b.transpose(), c.transpose(), d.transpose();
+    r.triangles.resize(2, 3);
+    r.triangles << 0, 1, 2, 0, 2, 3;
+    return r;
+  };
+  Cutter cutter(make_grid({Vec3(0, 0, 0), Vec3(1, 1, 1)}, {4, 4, 4}, 5));
+  cutter.cut(plane_square(Vec3(0.5, 0.5, zc), Vec3(0, 0, 1), 3));
+  cutter.cut(rectangle(Vec3(xc, -1, -1), Vec3(xc, 2, -1), Vec3(xc, 2, zc), Vec3(xc, -1, zc)));  // below the cut only
+  cutter.cut(rectangle(Vec3(-1, yc, zc), Vec3(2, yc, zc), Vec3(2, yc, 2), Vec3(-1, yc, 2)));    // above it only
+  const CutResult result = cutter.result();
+  ASSERT_EQ(result.mesh.num_pieces(), 4);
+  const Points& rest = result.mesh.mesh.rest();
+  // Each piece by where its copies lie on average: 0 B (below, x < xc), 1 C, 2 A (above, y < yc), 3 A2.
+  const auto& copies = cutter.tet_nodes();
+  std::vector<Vec3> centre(static_cast<std::size_t>(result.mesh.num_pieces()), Vec3::Zero());
+  std::vector<double> count(centre.size(), 0);
+  for (std::size_t copy = 0; copy < copies.size(); ++copy) {
+    const auto piece = static_cast<std::size_t>(result.mesh.tet_piece[copy]);
+    for (const Index n : copies[copy]) centre[piece] += rest.row(n).transpose() / 4;
+    count[piece] += 1;
+  }
+  std::vector<int> role(centre.size());
+  for (std::size_t piece = 0; piece < centre.size(); ++piece) {
+    const Vec3 c = centre[piece] / count[piece];
+    role[piece] = c.z() < zc ? (c.x() < xc ? 0 : 1) : (c.y() < yc ? 2 : 3);
+  }
+  std::vector<int> node_role(static_cast<std::size_t>(rest.rows()), -1);
+  for (std::size_t copy = 0; copy < copies.size(); ++copy) {
+    for (const Index n : copies[copy]) node_role[static_cast<std::size_t>(n)] = role[static_cast<std::size_t>(result.mesh.tet_piece[copy])];
+  }
+  // The start. A2 is also moved 0.005 along -x, so that A's outer wall there does not lie in
+  // A2's plane (their edges crossing on the rim line, a hair apart, would stop any move of one
+  // against the other).
+  const double allowance = 0.1 * dhat;  // the guards' allowance (checked below)
+  Points start = rest;
+  for (Index n = 0; n < rest.rows(); ++n) {
+    const int r = node_role[static_cast<std::size_t>(n)];
+    if (r == 1) start(n, 2) -= 9 * allowance;
+    if (r == 2) start.row(n) += Vec3(-slide, slide, 0).transpose();
+    if (r == 3) start.row(n) += Vec3(-slide - 0.005, slide, 5 * allowance).transpose();
+  }
+  sim::detail::SurfaceContact contact;
+  sim::SurfaceContactOptions options;
+  options.thickness = dhat;
+  const std::vector<std::uint8_t> fresh(copies.size(), 1);
+  contact.set_surface(result.surface, copies, rest, start, fresh, options, soft().youngs_modulus);
+  ASSERT_DOUBLE_EQ(contact.guard_allowance(), allowance);
+  const Points at_start = result.surface.positions(copies, start);
+  const auto& triangles = result.surface.surface.triangles;
+  const auto triangle_role = [&](Index t) {
+    return role[static_cast<std::size_t>(result.mesh.tet_piece[static_cast<std::size_t>(result.surface.triangle_tet[static_cast<std::size_t>(t)])])];
+  };
+  const auto on_horizontal_cut = [&](Index t) { return result.surface.triangle_source[static_cast<std::size_t>(t)] <= 1; };
+  // The rims' vertices next to the corner: A's over C and B's under A2 lie farther from the other
+  // rim than the thickness (no edge of their other faces is guarded against it).
+  const double rim_y = yc + slide, corner_x = xc - slide;  // A's rim, A's corner vertex
+  double a_next = 2, b_next = 2;
+  for (Index t = 0; t < triangles.rows(); ++t) {
+    if (!on_horizontal_cut(t)) continue;
+    for (int i = 0; i < 3; ++i) {
+      const Vec3 p = at_start.row(triangles(t, i)).transpose();
+      if (triangle_role(t) == 2 && std::abs(p.y() - rim_y) < 1e-9 && p.x() > xc) a_next = std::min(a_next, p.x());
+      if (triangle_role(t) == 0 && std::abs(p.x() - xc) < 1e-9 && p.y() > rim_y) b_next = std::min(b_next, p.y());
+    }
+  }
+  ASSERT_GT(a_next - xc, dhat);
+  ASSERT_GT(b_next - rim_y, dhat);
+  // The tilt, by how far down each point goes: 1 at A's corner vertex (corner_x, rim_y) and at
+  // B's (xc, yc), 1 + 50 * slide where the rim edges cross (xc, rim_y), no steeper along x past
+  // A's nodes at 0.75 - slide (so that A's face over C stays in front of C's).
+  const double gradient = 50, flat_from = 0.75 - slide;
+  const auto down = [&](double x, double y) { return 1 + gradient * (std::min(x, flat_from) - corner_x) + gradient * (y - rim_y); };
+  double held = 0, over_c = 0;
+  for (Index t = 0; t < triangles.rows(); ++t) {
+    if (!on_horizontal_cut(t)) continue;
+    for (int i = 0; i < 3; ++i) {
+      const Vec3 p = at_start.row(triangles(t, i)).transpose();
+      const int r = triangle_role(t);
+      if ((r == 2 && p.x() <= xc) || (r == 0 && p.y() <= rim_y && p.x() >= -slide && p.y() >= slide)) held = std::max(held, down(p.x(), p.y()));
+      if (r == 2 && p.x() > xc) over_c = std::max(over_c, down(p.x(), p.y()));
+    }
+  }
+  const double crossing = down(xc, rim_y);
+  ASSERT_NEAR(held, 1, 1e-6);
+  ASSERT_GT(crossing, 1.4);
+  ASSERT_LT(over_c * 1.3 / crossing, 8);  // A's face over C stays in front of C's below (9 allowances lower)
+  Points direction = Points::Zero(rest.rows(), 3);  // the crossing 20 allowances down
+  for (Index n = 0; n < rest.rows(); ++n) {
+    const int r = node_role[static_cast<std::size_t>(n)];  // A2 as A at its rim: no move of one against the other there
+    if (r >= 2) direction(n, 2) = -20 * allowance / crossing * down(start(n, 0), r == 2 ? start(n, 1) : rim_y);
+  }
+  // How deep A's face in the cut lies behind B's (z = zc, B does not move) over B (x <= xc): the
+  // lowest point of each of A's triangles there, their sides clipped at x = xc.
+  const auto depth_over_b = [&](const Points& nodes) {
+    const Points at = result.surface.positions(copies, nodes);
+    double deepest = -std::numeric_limits<double>::infinity();
+    for (Index t = 0; t < triangles.rows(); ++t) {
+      if (!on_horizontal_cut(t) || triangle_role(t) != 2) continue;
+      for (int i = 0; i < 3; ++i) {
+        const Vec3 p = at.row(triangles(t, i)).transpose(), q = at.row(triangles(t, (i + 1) % 3)).transpose();
+        if (p.x() <= xc) deepest = std::max(deepest, zc - p.z());
+        if ((p.x() - xc) * (q.x() - xc) < 0) deepest = std::max(deepest, zc - (p.z() + (xc - p.x()) / (q.x() - p.x()) * (q.z() - p.z())));
+      }
+    }
+    return deepest;
+  };
+  ASSERT_LT(depth_over_b(start), 0.01 * allowance);
+  EXPECT_GT(depth_over_b(start + direction), 15 * allowance);  // the whole move would sink A
+  // The guards made at the start hold the crossing: where A's face has sunk there by 1.3
+  // allowances, and by no more than 0.9 at the vertices held on B's plane, a guard is past the
+  // allowance (by normals alone none was: -0.1).
+  contact.lag_guards(start);
+  const Points sunk = start + 1.3 / 20 * direction;
+  ASSERT_NEAR(depth_over_b(sunk), 1.3 * allowance, 0.01 * allowance);
+  EXPECT_GT(contact.guard_excess(sunk), 0.2 * allowance);
+  // Moves as the integrator takes them, the guards made again where they held one back.
+  Points x = start;
+  double moved = 0, deepest = 0;
+  for (int move = 0; move < 8; ++move) {
+    const double t = contact.max_step(x, direction.data());
+    x += t * direction;
+    moved += t;
+    deepest = std::max(deepest, depth_over_b(x));
+    EXPECT_LE(depth_over_b(x), allowance) << "move " << move << ", moved " << moved;
+    if (contact.guards_held_back()) contact.lag_guards(x);
+  }
+  EXPECT_GT(deepest, 0.5 * allowance);  // A did go down onto B
+}
+
 // A block cut across at z = 0.43, its lower half pinned (an incline that does not give), under
 // gravity tilted by `degrees` about y: the upper half rests on the lower one as on an incline,
 // held by nothing but the fresh cut's guards (the sides coincide, so no pair of them is in the
