@@ -1797,9 +1797,10 @@ void SurfaceContact::lag_guards(const Points& start) {
   first_vertex_guard_.assign(vertex_nodes_.size(), -1);
   for (std::size_t i = guard_vertex.size(); i-- > 0;) first_vertex_guard_[static_cast<std::size_t>(guard_vertex[i])] = static_cast<Index>(i);
   // On the plane with this normal through point `on`: the same plane as a guard's where the
-  // vertex stands as high over both (one_plane). By normals alone, an edge of one stick lying
+  // vertex stands as high over both (one_plane). By normals alone, an edge of one piece lying
   // across two others side by side, its ends guarded on their parallel faces at two heights,
-  // counted as held on both planes, and the edge between sank behind the higher one unguarded.
+  // counted as held on both planes, and the part of it over the higher face had no guard on that
+  // face's plane (AnEdgeAcrossParallelFacesAtTwoHeightsIsHeldOnEach).
   const auto held = [&](Index v, const Vec3& normal, const Vec3& on) {
     const Index first_guard = first_vertex_guard_[static_cast<std::size_t>(v)];
     if (first_guard < 0) return false;
