@@ -1799,11 +1799,12 @@ void SurfaceContact::lag_guards(const Points& start) {
   // sliced hand, was a large part of the edge scan.)
   first_vertex_guard_.assign(vertex_nodes_.size(), -1);
   for (std::size_t i = guard_vertex.size(); i-- > 0;) first_vertex_guard_[static_cast<std::size_t>(guard_vertex[i])] = static_cast<Index>(i);
-  // On the plane with this normal through point `on`: the same plane as a guard's where the
-  // vertex stands as high over both (one_plane). By normals alone, an edge of one piece lying
-  // across two others side by side, its ends guarded on their parallel faces at two heights,
-  // counted as held on both planes, and the part of it over the higher face had no guard on that
-  // face's plane (AnEdgeAcrossParallelFacesAtTwoHeightsIsHeldOnEach).
+  // Whether vertex v is held on the plane with this normal through point `on`: by a guard of its
+  // own on the same plane, one whose normal agrees and over which v stands as high (one_plane).
+  // By normals alone, an edge of one piece lying across two others side by side, its ends
+  // guarded on their parallel faces at two heights, counted as held on both planes, and the part
+  // of it over the higher face had no guard on that face's plane
+  // (AnEdgeAcrossParallelFacesAtTwoHeightsIsHeldOnEach).
   const auto held = [&](Index v, const Vec3& normal, const Vec3& on) {
     const Index first_guard = first_vertex_guard_[static_cast<std::size_t>(v)];
     if (first_guard < 0) return false;
