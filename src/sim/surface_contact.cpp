@@ -1764,8 +1764,10 @@ void SurfaceContact::lag_guards(const Points& start) {
   // heights (two sticks side by side under a third), the lower one for the vertex needs a guard
   // of its own.
   const double same_height = kSameHeight * delta;
-  const auto one_plane = [&](const Vec3& normal_a, double height_a, const Vec3& normal_b, double height_b) {
-    return normal_a.dot(normal_b) > 1 - kSamePlane && height_b > height_a - same_height;
+  // Whether a kept guard (its plane's normal, its vertex's height over it) holds the vertex on the
+  // plane with this normal over which it stands this high.
+  const auto covers = [&](const Vec3& kept_normal, double kept_height, const Vec3& normal, double height) {
+    return kept_normal.dot(normal) > 1 - kSamePlane && height > kept_height - same_height;
   };
   std::vector<Index> guard_vertex;   // per vertex guard, its vertex (ascending)
   std::vector<double> guard_height;  // per vertex guard, its vertex's height over its plane
@@ -1777,11 +1779,11 @@ void SurfaceContact::lag_guards(const Points& start) {
     while (end < found.size() && found[end].vertex == found[i].vertex) ++end;
     const std::size_t first_guard = guards_.size();
     for (std::size_t j = i; j < end; ++j) {
-      bool same_plane = false;
-      for (std::size_t h = first_guard; h < guards_.size() && !same_plane; ++h) {
-        same_plane = one_plane(guards_[h].normal, guard_height[h], found[j].normal, found[j].height);
+      bool covered = false;
+      for (std::size_t h = first_guard; h < guards_.size() && !covered; ++h) {
+        covered = covers(guards_[h].normal, guard_height[h], found[j].normal, found[j].height);
       }
-      if (same_plane) continue;
+      if (covered) continue;
       guards_.push_back({corners(candidates_[found[j].k]), {1.0, -found[j].beta[0], -found[j].beta[1], -found[j].beta[2]}, found[j].normal,
                          found[j].zero, found[j].wall, found[j].r, found[j].r.norm(), candidates_[found[j].k].b});
       guard_vertex.push_back(found[j].vertex);
@@ -1802,7 +1804,7 @@ void SurfaceContact::lag_guards(const Points& start) {
   first_vertex_guard_.assign(vertex_nodes_.size(), -1);
   for (std::size_t i = guard_vertex.size(); i-- > 0;) first_vertex_guard_[static_cast<std::size_t>(guard_vertex[i])] = static_cast<Index>(i);
   // Whether vertex v is held on the plane with this normal through point `on`: by a guard of its
-  // own whose normal agrees and over whose plane v stands no higher (one_plane).
+  // own whose normal agrees and over whose plane v stands no higher (covers).
   // By normals alone, an edge of one piece lying across two others side by side, its ends
   // guarded on their parallel faces at two heights, counted as held on both planes, and the part
   // of it over the higher face had no guard on that face's plane
@@ -1812,7 +1814,7 @@ void SurfaceContact::lag_guards(const Points& start) {
     if (first_guard < 0) return false;
     const double height = normal.dot(y_.row(v).transpose() - on);
     for (auto i = static_cast<std::size_t>(first_guard); i < guard_vertex.size() && guard_vertex[i] == v; ++i) {
-      if (one_plane(guards_[i].normal, guard_height[i], normal, height)) return true;
+      if (covers(guards_[i].normal, guard_height[i], normal, height)) return true;
     }
     return false;
   };
