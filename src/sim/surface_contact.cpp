@@ -250,6 +250,7 @@ void SurfaceContact::clear_surface() {
   piece_nodes_ = {};
   candidates_.clear();
   proximities_.clear();
+  distances_.clear();
   friction_.clear();
   guards_.clear();
   rho_ = -1;
@@ -441,7 +442,7 @@ void SurfaceContact::set_surface(const MaterialSurface& surface, std::span<const
   const double dhat = settings_.thickness;
   for (std::size_t k = 0; k < candidates_.size(); ++k) {
     const Candidate& c = candidates_[k];
-    if (c.neighbouring || !(proximities_[k].distance < dhat)) continue;
+    if (c.neighbouring || !(distances_[k] < dhat)) continue;
     if (!was_changed(static_cast<Index>(c.copies >> 32)) && !was_changed(static_cast<Index>(c.copies & 0xffffffffu))) continue;
     // Across a cut: close in the material, and copies of tets that were neighbours before any
     // cut (a cut's new nodes keep their sources' rest positions, so such copies have corners at
@@ -525,6 +526,28 @@ bool SurfaceContact::vertex_faces(Index v, const Vec3& normal, bool on_two_sided
     if ((!on_two_sided_cut || two_sided_triangle_[t]) && rest_normals_[t].dot(normal) < -kFacing) return true;
   }
   return false;
+}
+
+std::uint8_t SurfaceContact::facing_faces(const Candidate& c) const {
+  const std::array<Index, 4> corner = corners(c);
+  std::uint8_t faces = kFacesKnown;
+  if (!c.edges) {
+    const Vec3& facing = rest_normals_[static_cast<std::size_t>(c.b)];
+    if (!facing.isZero() && vertex_faces(corner[0], facing)) faces |= 1;
+    return faces;
+  }
+  // The first edge's ends against the second edge's faces (bits 1 to 3), then the other way.
+  for (const auto& [first, edge, bit] : {std::tuple{0, c.b, 1}, std::tuple{2, c.a, 1 + kFacesPerEdge}}) {
+    const auto e = static_cast<std::size_t>(edge);
+    for (Index i = edge_triangle_start_[e]; i < std::min(edge_triangle_start_[e + 1], edge_triangle_start_[e] + kFacesPerEdge); ++i) {
+      const Vec3& facing = rest_normals_[static_cast<std::size_t>(edge_triangles_[static_cast<std::size_t>(i)])];
+      if (!facing.isZero() && (vertex_faces(corner[static_cast<std::size_t>(first)], facing) ||
+                               vertex_faces(corner[static_cast<std::size_t>(first) + 1], facing))) {
+        faces |= static_cast<std::uint8_t>(1 << (bit + (i - edge_triangle_start_[e])));
+      }
+    }
+  }
+  return faces;
 }
 
 bool SurfaceContact::faces_across_cut(const Candidate& c) const {
@@ -648,8 +671,8 @@ void SurfaceContact::collect_active(const Points& at) {
     if (chunk < pair_chunks) {
       if (pairs_hold) return;
       for (Index k = chunk * kNodeChunk; k < std::min(K, (chunk + 1) * kNodeChunk); ++k) {
+        if (candidates_[k].joined || candidates_[k].sutured || !(distances_[k] < dhat)) continue;
         const collision::Proximity& p = proximities_[k];
-        if (candidates_[k].joined || candidates_[k].sutured || !(p.distance < dhat)) continue;
         ActiveTerm& a = out.emplace_back();
         make_term(corners(candidates_[k]), p.w, &a.term);
         a.term.r = p.r;
@@ -698,6 +721,7 @@ void SurfaceContact::measure(unsigned which) {
   if (missing == 0) return;
   measured_ |= missing;
   proximities_.resize(candidates_.size());
+  distances_.resize(candidates_.size());
   for_chunks(static_cast<Index>(candidates_.size()), kNodeChunk, [&](Index begin, Index end, Index) {
     for (Index k = begin; k < end; ++k) {
       const Candidate& c = candidates_[k];
@@ -706,10 +730,11 @@ void SurfaceContact::measure(unsigned which) {
       // (listed beyond it by more than the vertices can have moved since, or with boxes apart by
       // more) are left at infinity unmeasured.
       if (c.reference_distance - reference_relative_ > (1 + kBoundSlack) * settings_.thickness) {
-        proximities_[k].distance = std::numeric_limits<double>::infinity();
+        proximities_[k].distance = distances_[k] = std::numeric_limits<double>::infinity();
         continue;
       }
       measure_within(corner_positions(c, y_), c.edges, settings_.thickness, &proximities_[k]);
+      distances_[k] = proximities_[k].distance;
     }
   });
 }
@@ -1196,7 +1221,7 @@ void SurfaceContact::rebuild(double rho, bool made_now) {
       for (const auto& [a, a_box] : *near_g) {
         const spatial::Aabb reach = a_box.grown(rho);
         for (const auto& [b, b_box] : *near_h) {
-          if (reach.meets(b_box)) consider({a, b, edges, 0, 0, 0, 0, 0, 0, key, 0.0}, group_copy_[g], group_copy_[h], near);
+          if (reach.meets(b_box)) consider({a, b, edges, 0, 0, 0, 0, 0, 0, 0, key, 0.0}, group_copy_[g], group_copy_[h], near);
         }
       }
     };
@@ -1628,7 +1653,7 @@ double SurfaceContact::leg_step(const Points& from, const Eigen::Map<const Point
       };
       // Where the pair was measured at the move's start already (within dhat, at y_: the Newton
       // step's evaluation there), that.
-      collision::Proximity at = counted_measured && std::isfinite(proximities_[k].distance) ? proximities_[k] : proximity_along(0);
+      collision::Proximity at = counted_measured && std::isfinite(distances_[k]) ? proximities_[k] : proximity_along(0);
       const double start = at.distance;
       if (!(bound > 0) || start - bound > 0) continue;  // cannot come within reach this step
       if (!(start > 0)) {
@@ -1722,16 +1747,16 @@ void SurfaceContact::lag_guards(const Points& start) {
   std::vector<Found> found;
   append_chunks(K, kNodeChunk, &found, [&](Index begin, Index end, std::vector<Found>* out) {
     for (Index k = begin; k < end; ++k) {
-      const Candidate& c = candidates_[k];
-      if (!c.joined || c.sutured || c.edges || !(proximities_[k].distance < dhat)) continue;
-      const std::array<Index, 4> corner = corners(c);
-      const Vec3 p = y_.row(corner[0]).transpose(), a = y_.row(corner[1]).transpose(), b = y_.row(corner[2]).transpose(),
-                 q = y_.row(corner[3]).transpose();
+      Candidate& c = candidates_[k];
+      if (!c.joined || c.sutured || c.edges || !(distances_[k] < dhat)) continue;
       // Only a vertex whose surface faces the triangle in the material: the other side of the cut
       // (one of the vertex's triangles turned against the triangle's), not a neighbour of the
       // triangle on its own side, which may lie beside it and below its plane.
-      const Vec3& facing = rest_normals_[static_cast<std::size_t>(c.b)];
-      if (facing.isZero() || !vertex_faces(corner[0], facing)) continue;
+      if (!(c.faces & kFacesKnown)) c.faces = facing_faces(c);
+      if (!(c.faces & 1)) continue;
+      const std::array<Index, 4> corner = corners(c);
+      const Vec3 p = y_.row(corner[0]).transpose(), a = y_.row(corner[1]).transpose(), b = y_.row(corner[2]).transpose(),
+                 q = y_.row(corner[3]).transpose();
       const Vec3 normal = unit_normal(a, b, q, dhat);  // outward: the triangle's material is behind it
       if (normal.isZero()) continue;
       const Vec3 cross = (b - a).cross(q - a);
@@ -1834,21 +1859,32 @@ void SurfaceContact::lag_guards(const Points& start) {
   };
   append_chunks(K, kNodeChunk, &guards_, [&](Index begin, Index end, std::vector<Guard>* out) {
     for (Index k = begin; k < end; ++k) {
-      const Candidate& c = candidates_[k];
-      if (!c.joined || c.sutured || !c.edges || !(proximities_[k].distance < dhat)) continue;
+      Candidate& c = candidates_[k];
+      if (!c.joined || c.sutured || !c.edges || !(distances_[k] < dhat)) continue;
+      if (!(c.faces & kFacesKnown)) c.faces = facing_faces(c);
+      if (!(c.faces & ~kFacesKnown) && edge_triangle_start_[c.a + 1] - edge_triangle_start_[c.a] <= kFacesPerEdge &&
+          edge_triangle_start_[c.b + 1] - edge_triangle_start_[c.b] <= kFacesPerEdge) {
+        continue;  // no face of either edge faces the other's ends
+      }
       const collision::Proximity& p = proximities_[k];
       const std::array<Index, 4> corner = corners(c);
       // The faces of edge (k0, k1), turned against a face around the other edge's corners; sign +1
       // when the faces are the second edge's (r points from them to the first edge), -1 otherwise.
       for (const auto& [first, second, sign] : {std::tuple{0, 2, 1.0}, std::tuple{2, 0, -1.0}}) {
         const auto edge = static_cast<std::size_t>(second == 0 ? c.a : c.b);
+        const int bit = first == 0 ? 1 : 1 + kFacesPerEdge;
         for (Index i = edge_triangle_start_[edge]; i < edge_triangle_start_[edge + 1]; ++i) {
           const Index t = edge_triangles_[static_cast<std::size_t>(i)];
           const auto& tri = triangles_[static_cast<std::size_t>(t)];
-          const Vec3& facing = rest_normals_[static_cast<std::size_t>(t)];
-          if (facing.isZero() || !(vertex_faces(corner[static_cast<std::size_t>(first)], facing) ||
-                                   vertex_faces(corner[static_cast<std::size_t>(first) + 1], facing))) {
-            continue;
+          const Index face = i - edge_triangle_start_[edge];
+          if (face < kFacesPerEdge) {
+            if (!(c.faces & (1 << (bit + face)))) continue;
+          } else {
+            const Vec3& facing = rest_normals_[static_cast<std::size_t>(t)];
+            if (facing.isZero() || !(vertex_faces(corner[static_cast<std::size_t>(first)], facing) ||
+                                     vertex_faces(corner[static_cast<std::size_t>(first) + 1], facing))) {
+              continue;
+            }
           }
           const Vec3 normal = unit_normal(y_.row(tri[0]).transpose(), y_.row(tri[1]).transpose(), y_.row(tri[2]).transpose(), dhat);
           if (normal.isZero()) continue;
@@ -1906,7 +1942,7 @@ void SurfaceContact::update_joins(const Points& at) {
   append_chunks(static_cast<Index>(candidates_.size()), kNodeChunk, &found, [&](Index begin, Index end, std::vector<std::size_t>* out) {
     for (Index k = begin; k < end; ++k) {
       const Candidate& c = candidates_[static_cast<std::size_t>(k)];
-      if (c.joined && !c.neighbouring && proximities_[k].distance < settings_.thickness) out->push_back(join_of(c));
+      if (c.joined && !c.neighbouring && distances_[k] < settings_.thickness) out->push_back(join_of(c));
     }
   });
   std::vector<std::uint8_t> touching(joins_.size(), 0);

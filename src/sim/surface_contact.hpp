@@ -343,6 +343,9 @@ class SurfaceContact {
     // Of copies that share a node, facing each other across a cut (faces_across_cut): joined
     // for good where rest_touching (within kNeighbourReach dhat in the material, or touching now).
     std::uint8_t neighbouring;
+    // Which of its faces guard it, by the material alone (see facing_faces): kFacesKnown once
+    // found, the first time lag_guards asks; 0 before.
+    std::uint8_t faces;
     std::uint64_t copies;     // the copy pair, (min << 32) | max
     // Its distance at reference_, where the list was made: at y_ it is at least this less
     // reference_relative_.
@@ -577,6 +580,15 @@ class SurfaceContact {
   /// than 120 degrees against `normal` in the material (v on the other side of a cut from a
   /// triangle with that normal).
   bool vertex_faces(Index v, const Vec3& normal, bool on_two_sided_cut = false) const;
+  /// Which faces of a pair a guard may hold it on, by the material alone, as Candidate::faces
+  /// holds them: for a vertex and a triangle, bit 0 when the triangle has a normal there and the
+  /// vertex faces it; for two edges, bit 1 + i when the i-th face around the second edge (i < 3)
+  /// has a normal and an end of the first faces it, bit 4 + i the same with the edges' roles
+  /// swapped; kFacesKnown always. The guards ask this of every joined pair each step (on the
+  /// sliced ball, four times for each of 30k edge pairs), and the answer never changes.
+  std::uint8_t facing_faces(const Candidate& c) const;
+  static constexpr std::uint8_t kFacesKnown = 0x80;
+  static constexpr int kFacesPerEdge = 3;
   /// The pair's four corners at vertex positions y (the vertex or first edge first).
   std::array<Vec3, 4> corner_positions(const Candidate& c, const Points& y) const;
   std::array<Index, 4> corners(const Candidate& c) const;
@@ -656,6 +668,10 @@ class SurfaceContact {
   // The Verlet list: candidates within rho_ of each other at vertex positions reference_.
   std::vector<Candidate> candidates_;
   std::vector<collision::Proximity> proximities_;
+  // Their distances apart: the passes over the candidates that ask only which pairs are within
+  // dhat read 8 bytes a pair, not a Proximity's 136 (on the sliced ball, 60k pairs several times
+  // a step: most of those passes' time went to reading them).
+  std::vector<double> distances_;
   Points reference_, y_, placed_;
   // The node positions y_ was placed from (see cover).
   Points y_nodes_;
