@@ -66,6 +66,11 @@ constexpr double kFlat = 1e-6;
 // sliced ball 37k active terms a step against 30k by normals alone, a step 9% longer; one way,
 // 31k.
 constexpr double kSamePlane = 1e-6;
+// Two triangles of one copy sharing an edge lie in one plane in the material when their unit
+// normals' dot product is within this of 1 (an angle below 1.5e-6: the fans over one flat polygon,
+// whose normals differ by rounding, 1e-15; a real fold that small moves a point of a polygon of
+// size L by 1.5e-6 L from the plane, a ten-thousandth of the allowance on a surface of edges L).
+constexpr double kFlatFold = 1e-12;
 constexpr double kSameHeight = 0.05;
 // A guard's vertex may lie beside its triangle by up to the triangle's size (its barycentric
 // coordinates down to -1).
@@ -375,6 +380,16 @@ void SurfaceContact::set_surface(const MaterialSurface& surface, std::span<const
   for (std::size_t t = 0; t < F; ++t) {
     const auto& c = triangles_[t];
     rest_normals_[t] = unit_normal(rest_y_.row(c[0]).transpose(), rest_y_.row(c[1]).transpose(), rest_y_.row(c[2]).transpose(), settings_.thickness);
+  }
+  // The edges inside a flat polygon: two triangles of one copy, in one plane in the material
+  // (normals within kFlatFold), which its one affine map keeps in one plane.
+  flat_edge_.assign(edges_.size(), 0);
+  for (std::size_t e = 0; e < edges_.size(); ++e) {
+    if (edge_triangle_start_[e + 1] - edge_triangle_start_[e] != 2) continue;
+    const auto t = static_cast<std::size_t>(edge_triangles_[static_cast<std::size_t>(edge_triangle_start_[e])]);
+    const auto u = static_cast<std::size_t>(edge_triangles_[static_cast<std::size_t>(edge_triangle_start_[e]) + 1]);
+    if (triangle_copy_[t] != triangle_copy_[u] || rest_normals_[t].isZero() || rest_normals_[u].isZero()) continue;
+    if (rest_normals_[t].dot(rest_normals_[u]) > 1 - kFlatFold) flat_edge_[e] = 1;
   }
   for (std::size_t v = 0; v < V; ++v) {
     const std::size_t first_listing = vertex_listing.size();
@@ -1861,6 +1876,8 @@ void SurfaceContact::lag_guards(const Points& start) {
     for (Index k = begin; k < end; ++k) {
       Candidate& c = candidates_[k];
       if (!c.joined || c.sutured || !c.edges || !(distances_[k] < dhat)) continue;
+      // An edge inside a flat polygon needs no guard, nor do its faces give one: see flat_edge_.
+      if (flat_edge_[static_cast<std::size_t>(c.a)] || flat_edge_[static_cast<std::size_t>(c.b)]) continue;
       if (!(c.faces & kFacesKnown)) c.faces = facing_faces(c);
       if (!(c.faces & ~kFacesKnown) && edge_triangle_start_[c.a + 1] - edge_triangle_start_[c.a] <= kFacesPerEdge &&
           edge_triangle_start_[c.b + 1] - edge_triangle_start_[c.b] <= kFacesPerEdge) {

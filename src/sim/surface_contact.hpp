@@ -96,7 +96,8 @@
 // Edges too: every edge-edge pair of joined copies within dhat whose one edge lies on a face that
 // a face around the other edge's corners faces gets the same guard on the vector between their
 // closest points along that face's normal (its closest points held for the step), unless both
-// ends of the other edge are guarded against that plane already (g is linear along the edge).
+// ends of the other edge are guarded against that plane already (g is linear along the edge),
+// and none for an edge inside a flat polygon of either side (see flat_edge_).
 // Found behind the whole allowance at a step's start, such a pair is guarded from where it is
 // where the edges have crossed into the material (the closest points inside both edges, behind
 // every face around the face's edge), and left alone elsewhere (round the rim, outside): two of
@@ -665,6 +666,17 @@ class SurfaceContact {
   std::vector<Index> vertex_triangle_start_, vertex_triangles_;
   // Per edge its triangles, ascending (CSR).
   std::vector<Index> edge_triangle_start_, edge_triangles_;
+  // Per edge, whether it lies inside a flat polygon: its two triangles are of one copy and in one
+  // plane in the material, so in one plane always (a copy moves affinely). The guards leave out
+  // the pairs of such an edge. Why nothing is lost: a guard holds a side's points in front of
+  // one plane of the other side, through one flat polygon Q of it. In front is an affine
+  // condition on each flat polygon P of the side, so it holds on all of P over Q where it holds
+  // at the corners of P over Q: P's corners over Q (vertex guards), Q's corners under P (the
+  // other side's vertex guards, on P's plane: the same condition where the planes are parallel,
+  // as the two sides of a cut are), and the crossings of P's rim with Q's (edge guards). A point
+  // of an edge inside P or inside Q is none of those. On the sliced ball, 42% of the joined edge
+  // pairs within dhat have such an edge (fans over the cut's polygons).
+  std::vector<std::uint8_t> flat_edge_;
   // The Verlet list: candidates within rho_ of each other at vertex positions reference_.
   std::vector<Candidate> candidates_;
   std::vector<collision::Proximity> proximities_;
