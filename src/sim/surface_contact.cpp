@@ -555,14 +555,18 @@ std::uint8_t SurfaceContact::facing_faces(const Candidate& c) const {
   for (const auto& [first, edge, bit] : {std::tuple{0, c.b, 1}, std::tuple{2, c.a, 1 + kFacesPerEdge}}) {
     const auto e = static_cast<std::size_t>(edge);
     for (Index i = edge_triangle_start_[e]; i < std::min(edge_triangle_start_[e + 1], edge_triangle_start_[e] + kFacesPerEdge); ++i) {
-      const Vec3& facing = rest_normals_[static_cast<std::size_t>(edge_triangles_[static_cast<std::size_t>(i)])];
-      if (!facing.isZero() && (vertex_faces(corner[static_cast<std::size_t>(first)], facing) ||
-                               vertex_faces(corner[static_cast<std::size_t>(first) + 1], facing))) {
+      if (ends_face(corner, first, edge_triangles_[static_cast<std::size_t>(i)])) {
         faces |= static_cast<std::uint8_t>(1 << (bit + (i - edge_triangle_start_[e])));
       }
     }
   }
   return faces;
+}
+
+bool SurfaceContact::ends_face(const std::array<Index, 4>& corner, int first, Index triangle) const {
+  const Vec3& facing = rest_normals_[static_cast<std::size_t>(triangle)];
+  return !facing.isZero() && (vertex_faces(corner[static_cast<std::size_t>(first)], facing) ||
+                              vertex_faces(corner[static_cast<std::size_t>(first) + 1], facing));
 }
 
 bool SurfaceContact::faces_across_cut(const Candidate& c) const {
@@ -1894,15 +1898,7 @@ void SurfaceContact::lag_guards(const Points& start) {
           const Index t = edge_triangles_[static_cast<std::size_t>(i)];
           const auto& tri = triangles_[static_cast<std::size_t>(t)];
           const Index face = i - edge_triangle_start_[edge];
-          if (face < kFacesPerEdge) {
-            if (!(c.faces & (1 << (bit + face)))) continue;
-          } else {
-            const Vec3& facing = rest_normals_[static_cast<std::size_t>(t)];
-            if (facing.isZero() || !(vertex_faces(corner[static_cast<std::size_t>(first)], facing) ||
-                                     vertex_faces(corner[static_cast<std::size_t>(first) + 1], facing))) {
-              continue;
-            }
-          }
+          if (face < kFacesPerEdge ? !(c.faces & (1 << (bit + face))) : !ends_face(corner, first, t)) continue;
           const Vec3 normal = unit_normal(y_.row(tri[0]).transpose(), y_.row(tri[1]).transpose(), y_.row(tri[2]).transpose(), dhat);
           if (normal.isZero()) continue;
           // Both ends held to this plane by their own guards hold the edge (g is linear along it).

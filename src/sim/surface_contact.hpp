@@ -588,6 +588,10 @@ class SurfaceContact {
   /// swapped; kFacesKnown always. The guards ask this of every joined pair each step (on the
   /// sliced ball, four times for each of 30k edge pairs), and the answer never changes.
   std::uint8_t facing_faces(const Candidate& c) const;
+  /// Whether `triangle` has a normal in the material and an end of the edge at corner[first],
+  /// corner[first + 1] faces it (the test behind facing_faces' bits for edges, asked directly
+  /// of a face past the kFacesPerEdge-th).
+  bool ends_face(const std::array<Index, 4>& corner, int first, Index triangle) const;
   static constexpr std::uint8_t kFacesKnown = 0x80;
   static constexpr int kFacesPerEdge = 3;
   /// The pair's four corners at vertex positions y (the vertex or first edge first).
