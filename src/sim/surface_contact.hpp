@@ -314,6 +314,8 @@ class SurfaceContact {
   /// whether the barrier counts it (neither joined nor sutured). For checks.
   std::vector<std::array<Index, 3>> candidate_pairs(Index* listed_apart = nullptr, std::vector<std::uint8_t>* counted = nullptr) const;
   const std::vector<std::array<Index, 2>>& edge_list() const { return edges_; }
+  /// Whether edge e (of edge_list()) lies inside a flat polygon and so has no guards (flat_edge_).
+  bool flat_edge(Index e) const { return flat_edge_[static_cast<std::size_t>(e)] != 0; }
   Index num_joins() const { return static_cast<Index>(joins_.size()); }
   Index num_rebuilds() const { return rebuilds_; }
   /// How often the pairs of copies under the candidates were found again (see copy_pairs_).

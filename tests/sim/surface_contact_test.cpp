@@ -1060,8 +1060,10 @@ TEST(SurfaceContact, NoGuardedSideSinksBehindATurningFaceBeyondTheAllowance) {
 // lower, in moves max_step allows with the guards made again where a move was held back: no
 // point of a side's cut faces (on a grid of each triangle, the edges inside the polygons
 // included) lies deeper behind the other side's faces than the allowance. (Here the corners'
-// guards stop the moves before the folds turn the polygons far: with no edge guard at all the
-// check holds too. Where an edge's guard is needed, AnEdgeAcrossParallelFacesAtTwoHeightsIsHeldOnEach
+// guards stop the moves before the folds turn the polygons far: with no edge guard at all that
+// check holds too. What fails here when the rule goes wrong is the edges it leaves out: a rule
+// that took coplanar triangles of two copies for one polygon marks the rims between the cut's
+// polygons. Where an edge's guard is needed, AnEdgeAcrossParallelFacesAtTwoHeightsIsHeldOnEach
 // fails without it.)
 TEST(SurfaceContact, NoPointOfACutsFlatPolygonsSinksBeyondTheAllowanceThoughTheirInnerEdgesHaveNoGuards) {
   const double dhat = 0.01, fold = 0.05, cut = 0.43;
@@ -1108,6 +1110,25 @@ TEST(SurfaceContact, NoPointOfACutsFlatPolygonsSinksBeyondTheAllowanceThoughThei
     }
   }
   EXPECT_GT(inner_edges, 20);
+  // The contact finds the same inner edges on the cut, and no edge between two copies (a rim
+  // between polygons, which the guards must hold) among its flat ones.
+  std::map<std::pair<Index, Index>, std::vector<Index>> edge_triangles;
+  for (Index t = 0; t < s.triangles.rows(); ++t) {
+    for (int k = 0; k < 3; ++k) {
+      const Index a = s.triangles(t, k), b = s.triangles(t, (k + 1) % 3);
+      edge_triangles[{std::min(a, b), std::max(a, b)}].push_back(t);
+    }
+  }
+  Index flat_on_cut = 0;
+  const auto& edges = contact.edge_list();
+  for (std::size_t e = 0; e < edges.size(); ++e) {
+    if (!contact.flat_edge(static_cast<Index>(e))) continue;
+    const std::vector<Index>& around = edge_triangles[{std::min(edges[e][0], edges[e][1]), std::max(edges[e][0], edges[e][1])}];
+    ASSERT_EQ(around.size(), 2u);
+    EXPECT_EQ(surface.triangle_tet[static_cast<std::size_t>(around[0])], surface.triangle_tet[static_cast<std::size_t>(around[1])]);
+    if (surface.triangle_source[static_cast<std::size_t>(around[0])] >= 0 && surface.triangle_source[static_cast<std::size_t>(around[1])] >= 0) ++flat_on_cut;
+  }
+  EXPECT_EQ(flat_on_cut, inner_edges);
   // How deep any point of one side's cut faces lies behind the other side's faces it is over
   // (within `reach` of their planes), at surface positions y: points on a grid of sixths of each
   // triangle, its edges and corners included.
