@@ -1901,16 +1901,9 @@ void SurfaceContact::lag_guards(const Points& start) {
           if (face < kFacesPerEdge ? !(c.faces & (1 << (bit + face))) : !ends_face(corner, first, t)) continue;
           const Vec3 normal = unit_normal(y_.row(tri[0]).transpose(), y_.row(tri[1]).transpose(), y_.row(tri[2]).transpose(), dhat);
           if (normal.isZero()) continue;
-          // Both ends held to this plane by their own guards hold the edge (g is linear along it);
-          // where the pair's closest point is an end of the edge (the other end's weight exactly
-          // 0: the crossing lies beyond it), that end's own guard on the plane holds the point.
-          // (On the sliced ball 37% of the edge guards were such ends, held already.)
+          // Both ends held to this plane by their own guards hold the edge (g is linear along it).
           const Vec3 on = y_.row(tri[0]).transpose();
-          const auto edge_end = [&](int which) { return corner[static_cast<std::size_t>(first + which)]; };
-          const bool held_0 = held(edge_end(0), normal, on);
-          if (held_0 && p.w[static_cast<std::size_t>(first) + 1] == 0) continue;
-          const bool held_1 = held(edge_end(1), normal, on);
-          if (held_1 && (held_0 || p.w[static_cast<std::size_t>(first)] == 0)) continue;
+          if (held(corner[static_cast<std::size_t>(first)], normal, on) && held(corner[static_cast<std::size_t>(first) + 1], normal, on)) continue;
           collision::Proximity foot = p;
           for (double& w : foot.w) w *= sign;
           const double zero = guard_zero(corner, foot.w, t);

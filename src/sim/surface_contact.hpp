@@ -97,8 +97,7 @@
 // a face around the other edge's corners faces gets the same guard on the vector between their
 // closest points along that face's normal (its closest points held for the step), unless both
 // ends of the other edge are guarded against that plane already (g is linear along the edge),
-// or the pair's closest point is an end of it that is (the same point, held), and none for an
-// edge inside a flat polygon of either side (see flat_edge_).
+// and none for an edge inside a flat polygon of either side (see flat_edge_).
 // Found behind the whole allowance at a step's start, such a pair is guarded from where it is
 // where the edges have crossed into the material (the closest points inside both edges, behind
 // every face around the face's edge), and left alone elsewhere (round the rim, outside): two of
@@ -274,9 +273,8 @@ class SurfaceContact {
   /// vertex-triangle pair of joined copies within dhat there whose vertex lies over the triangle
   /// and not behind it by more than the allowance, with the triangle's normal and the vertex's
   /// foot on it held for the step; and each edge-edge pair of joined copies within dhat with one
-  /// edge on a face the other's faces face, unless both ends of that edge, or the end that is the
-  /// pair's closest point, are guarded against the plane already, or either edge lies inside a
-  /// flat polygon, and not behind it by more than the allowance unless crossed into the
+  /// edge on a face the other's faces face, unless both ends of that edge are guarded against the
+  /// plane already, and not behind it by more than the allowance unless crossed into the
   /// material (see "Guards" above). O(candidates), in parallel.
   void lag_guards(const Points& start);
   Index num_guards() const { return static_cast<Index>(guards_.size()); }
