@@ -1400,14 +1400,15 @@ TEST(SurfaceContact, APieceSpinningOnItsOwnSpinsAsItDoesWithoutContact) {
 // the axis in the plane none ever does (the halves part at the first step): after 1 s they are
 // where they are without contact. About the normal the halves, which stretch apart unequally,
 // rub at the cut from the sixth step, and the barrier and conservative advancement act there:
-// after 1 s they lag 4 to 13 cm behind, with no pair crossed.
+// after 1 s they lag 7 to 15 cm behind, with no pair crossed.
 // That lag is chaotic at the level of rounding: the halves rub with one Newton iteration a step,
 // each move cut short where a pair comes close, so that the last bits of a distance decide which
 // move is cut, and the rest follows (built at -O1 and at -O2, the same code parts at the ninth
-// step). Spun faster by 0 to 2e-14 of the speed, 20 runs lagged 0.041 to 0.096 m (10 at -O1:
-// 0.039 to 0.129), and before the edge guards at held ends were left out 0.068 to 0.154 (most
-// near 0.117): the bound is on that spread, not on one draw of it (0.12 failed the -O1 build's
-// unperturbed run and four of the older code's 20). (Before the
+// step). Spun faster by 0 to 2e-14 of the speed, 20 runs lagged 0.068 to 0.154 m (15 of them
+// within 0.112-0.117); with the edge guards at held ends left out (tried twice, reverted: 81
+// sticks crossed with it) 0.041 to 0.096, and 0.039 to 0.129 at -O1. The bound is on that spread,
+// not on one draw of it: 0.12 failed four of the 20 runs, and the -O1 build's unperturbed run
+// with the end rule. (Before the
 // two pieces' turns were fitted, 28 and 20 of 30 moves were cut to the trust region and they
 // lagged 0.46 m and 1.16 m behind. Then, with the guards' bound per pair of pieces, every move
 // of the first steps was cut to about a half, and the later moves to the trust region, which made
