@@ -86,12 +86,24 @@ double min_chunks(Index count, Index chunk, double bound, std::vector<double>* p
 
 /// Calls body(begin, end, out) over the fixed chunks of [0, count), in parallel, each chunk
 /// appending its findings to a vector `out` of its own, and appends those to *into in chunk
-/// order: the result does not depend on the number of threads.
+/// order: the result does not depend on the number of threads. The chunks' vectors are `parts`,
+/// cleared first, so that a caller that keeps them reuses their memory.
+template <typename T, typename Body>
+void append_chunks(Index count, Index chunk, std::vector<T>* into, std::vector<std::vector<T>>* parts, const Body& body) {
+  parts->resize(static_cast<std::size_t>((count + chunk - 1) / chunk));
+  for_chunks(count, chunk, [&](Index begin, Index end, Index c) {
+    std::vector<T>* out = &(*parts)[static_cast<std::size_t>(c)];
+    out->clear();
+    body(begin, end, out);
+  });
+  for (const std::vector<T>& part : *parts) into->insert(into->end(), part.begin(), part.end());
+}
+
+/// The same with vectors of its own for the chunks.
 template <typename T, typename Body>
 void append_chunks(Index count, Index chunk, std::vector<T>* into, const Body& body) {
-  std::vector<std::vector<T>> found(static_cast<std::size_t>((count + chunk - 1) / chunk));
-  for_chunks(count, chunk, [&](Index begin, Index end, Index c) { body(begin, end, &found[static_cast<std::size_t>(c)]); });
-  for (const std::vector<T>& part : found) into->insert(into->end(), part.begin(), part.end());
+  std::vector<std::vector<T>> parts;
+  append_chunks(count, chunk, into, &parts, body);
 }
 
 class BlockSparseMatrix {
