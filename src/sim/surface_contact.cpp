@@ -75,6 +75,9 @@ constexpr double kSameHeight = 0.05;
 // A guard's vertex may lie beside its triangle by up to the triangle's size (its barycentric
 // coordinates down to -1).
 constexpr double kBeside = 1;
+// A vertex that does not face a triangle in the material is guarded on it only over it, its foot
+// inside by more than this (barycentric): not on its rim, where rounding puts a rim vertex's foot.
+constexpr double kSwungInside = 1e-6;
 // A guard's barrier stops this share of the allowance behind its zero: the plane it holds is its
 // triangle's at the step's start, and a triangle that turns within the step carries its plane past
 // the vertex held to the old one (corners pressed to the barrier's wall at the bottom of Figure
@@ -1801,6 +1804,16 @@ void SurfaceContact::lag_guards(const Points& start) {
     double height;   // the vertex's height over the triangle's plane (along normal)
     double zero, wall;
   };
+  // Whether one of vertex v's triangles faces a triangle of unit normal `normal` now (turned more
+  // than kFacing against it at the step's start).
+  const auto swung_to_face = [&](Index v, const Vec3& normal) {
+    for (Index i = vertex_triangle_start_[v]; i < vertex_triangle_start_[v + 1]; ++i) {
+      const auto& tri = triangles_[static_cast<std::size_t>(vertex_triangles_[i])];
+      const Vec3 n = unit_normal(y_.row(tri[0]).transpose(), y_.row(tri[1]).transpose(), y_.row(tri[2]).transpose(), dhat);
+      if (n.dot(normal) < -kFacing) return true;
+    }
+    return false;
+  };
   // Both scans below run in parallel over fixed chunks of the candidates, their findings joined
   // in chunk order: the guards do not depend on the number of threads.
   const auto K = static_cast<Index>(candidates_.size());
@@ -1811,9 +1824,10 @@ void SurfaceContact::lag_guards(const Points& start) {
       if (!c.joined || c.sutured || c.edges || !(distances_[k] < dhat)) continue;
       // Only a vertex whose surface faces the triangle in the material: the other side of the cut
       // (one of the vertex's triangles turned against the triangle's), not a neighbour of the
-      // triangle on its own side, which may lie beside it and below its plane.
+      // triangle on its own side, which may lie beside it and below its plane; or one that has
+      // swung over it since (below).
       if (!(c.faces & kFacesKnown)) c.faces = facing_faces(c);
-      if (!(c.faces & 1)) continue;
+      const bool faces_in_material = c.faces & 1;
       const std::array<Index, 4> corner = corners(c);
       const Vec3 p = y_.row(corner[0]).transpose(), a = y_.row(corner[1]).transpose(), b = y_.row(corner[2]).transpose(),
                  q = y_.row(corner[3]).transpose();
@@ -1831,6 +1845,14 @@ void SurfaceContact::lag_guards(const Points& start) {
       const double zero = guard_zero({corner[0], corner[1], corner[2], corner[3]}, {1, -beta_a, -beta_b, -beta_c}, c.b);
       const double g = normal.dot(p - (beta_a * a + beta_b * b + beta_c * q)) - zero;
       const double inside = std::min({beta_a, beta_b, beta_c});
+      // A vertex that does not face the triangle in the material (on its rim there: a cut's rim
+      // beside the other side's outer face, or meeting it at an angle) is guarded once it stands
+      // over the triangle and one of its own faces has turned against it now: two sticks hinged
+      // about the line where they touch until their outer faces faced each other, and one's corner
+      // went 1.3 allowances into the other's face with nothing holding it. Over the triangle, not
+      // on its rim: a rim vertex of faces side by side would be held to the other face's plane
+      // while the sides turn about that line.
+      if (!faces_in_material && !(inside > kSwungInside && swung_to_face(corner[0], normal))) continue;
       // Found behind the whole allowance, the vertex has passed what a guard allows: Figure 4's
       // pile left such a corner unguarded, and it sank 18 allowances into the other stick over
       // four steps. Over the triangle (not beside it, where it may have gone round the other

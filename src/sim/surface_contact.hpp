@@ -81,6 +81,14 @@
 // as it keeps the pairs' distances above 0, and max_step bounds each move so that no guarded side
 // lies deeper behind its triangle's own plane than the allowance (the held plane's error is
 // (n - n0) . r, bounded per guard from its triangle's corners and r over the move: guards_share).
+// A vertex that does not face the triangle in the material (it lies on the triangle's rim there:
+// a cut's rim beside the other side's outer face, or meeting it at an angle) gets the same guard
+// once it has swung over the triangle (its foot inside it, not on its rim) and one of its own
+// triangles has turned more than 120 degrees against it by their positions at the step's start:
+// two sticks hinged about the line where they touched until their outer faces faced each other,
+// and one's corner went 1.3 allowances into the other's outer face with nothing holding it (81
+// sticks, on one path). Faces still side by side, or only turned a little, get none, so that the
+// sides may turn about the line where they touch either way.
 // A vertex found behind the whole allowance at a step's
 // start, over its triangle, is guarded from where it is, its wall a hundredth of delta deeper, so
 // that the barrier pushes it back out (left unguarded, such a corner of Figure 4 sank 18
@@ -113,9 +121,11 @@
 // while some of their surfaces are still touching where they were cut apart; a copy spans one
 // tet, so only the two sides of a cut within a tet of each other are affected, and there they are
 // guarded, not ignored; what goes unseen is edge-edge crossings of joined copies whose edges lie
-// on no faces turned against each other, and vertices that do not face the triangle they approach (a cut's rim meeting the other side's outer surface),
-// bounded by the allowance while their neighbours are guarded, and counted by the exact check
-// (count_surface_intersections) if they go deeper. Pieces that stay in contact (a pile of sticks)
+// on no faces turned against each other in the material, and vertices that do not face
+// the triangle they approach in the material (a cut's rim meeting the other side's outer surface)
+// while none of their faces has turned against it by 120 degrees, bounded by the allowance while
+// their neighbours are guarded, and counted by the exact check (count_surface_intersections) if
+// they go deeper. Pieces that stay in contact (a pile of sticks)
 // stay joined for good, and there the vertex guards alone lapsed (a vertex carried more than dhat
 // past the face it faced) while the edge behind it sagged through the neighbour's corner: Figure
 // 4's pile crossed in up to 1,147 pairs, most deeper than six allowances; the edge guards (above)

@@ -516,6 +516,61 @@ TEST(SurfaceContact, HalvesFoundPressedBeyondTheAllowanceArePushedBackOut) {
   EXPECT_EQ(crossings(result.surface, copies, sim), 0);
 }
 
+// Two sticks of a pile hinged about the line where they touch until their front faces, side by
+// side and facing the same way in the material, faced each other, and one's corner went 1.3
+// allowances into the other's front face with nothing to push it out (81 sticks, on one path).
+// Here: the halves of a cut block, the left half folded 130 degrees about the line where the cut
+// meets the front face (x = 0.43, y = 0) and leant back 10 degrees about its bottom corner, which
+// is put 2 allowances into the right half's front face, 0.035 from the right half's rim (beyond
+// the thickness, 0.02: the right half's guards on the left half's cut face do not reach it). In
+// the material that corner touches the triangle it is in (at its corner), so their pair is joined
+// and out of the barrier; and none of the corner's faces faces it there (they are at 0 and 90
+// degrees to it), so it had no guard either: it stayed 1.5 allowances in, 3 pairs crossing, for
+// all ten steps. Its front and cut faces have turned against the right half's front face now: it
+// is guarded, and pushed back out at the first step.
+TEST(SurfaceContact, ACornerSwungIntoAFaceItTouchedOnlyAtItsRimIsPushedBackOut) {
+  CutBlock block;
+  const CutResult& result = block.result;
+  ASSERT_EQ(result.mesh.num_pieces(), 2);
+  const TetMesh& mesh = result.mesh.mesh;
+  const auto& copies = block.cutter.tet_nodes();
+  sim::Simulator& sim = block.sim;
+  const Index left_piece = piece_left_of_cut(result);
+  ASSERT_GE(left_piece, 0);
+  const double fold = 130 * std::numbers::pi / 180, lean = 10 * std::numbers::pi / 180;
+  const double delta = sim.surface_contact().fresh_cut_allowance;
+  ASSERT_GT(delta, 0);
+  const Vec3 corner(0.43, 0, 0), to(0.465, 2 * delta, 0.03);
+  const Eigen::Matrix3d turn = (Eigen::AngleAxisd(lean, Vec3::UnitX()) * Eigen::AngleAxisd(fold, Vec3::UnitZ())).toRotationMatrix();
+  Points x = sim.positions();
+  for (Index t = 0; t < mesh.num_tets(); ++t) {
+    if (result.mesh.tet_piece[t] != left_piece) continue;
+    for (int k = 0; k < 4; ++k) {
+      const Index n = mesh.tets()(t, k);
+      x.row(n) = (to + turn * (mesh.rest().row(n).transpose() - corner)).transpose();
+    }
+  }
+  sim.set_positions(x);
+  // How far the corner lies behind the right half's front face (y = 0: the right half is at rest).
+  Index corner_vertex = -1;
+  for (Index n = 0; n < result.surface.surface.num_vertices(); ++n) {
+    if (result.mesh.tet_piece[result.surface.vertex_tet[n]] == left_piece && (result.surface.surface.vertices.row(n).transpose() - corner).norm() < 1e-12) corner_vertex = n;
+  }
+  ASSERT_GE(corner_vertex, 0);
+  const auto depth = [&] { return result.surface.positions(copies, sim.positions())(corner_vertex, 1); };
+  ASSERT_NEAR(depth(), 2 * delta, 1e-12);
+  ASSERT_GT(crossings(result.surface, copies, sim), 0);
+  sim::StepOptions options;
+  options.dt = 0.01;
+  options.gravity = Vec3::Zero();
+  for (int step = 0; step < 10; ++step) {
+    EXPECT_TRUE(sim.step(options).converged) << "step " << step;
+    EXPECT_GT(sim.surface_contact().guards, 0) << "step " << step;
+    EXPECT_EQ(crossings(result.surface, copies, sim), 0) << "step " << step;
+  }
+  EXPECT_LT(depth(), 1.25 * delta);
+}
+
 // Two sides of a fresh cut, the right one turned a quarter turn about the rim where the cut meets
 // the front face, so that its bottom rim (perpendicular to the cut there) now runs along the cut
 // past the left side's vertical rim: the situation of two of Figure 4's sticks at 1.2 s, pivoting
