@@ -1777,6 +1777,19 @@ double SurfaceContact::leg_step(const Points& from, const Eigen::Map<const Point
   return std::min(t_guard, t_pairs);
 }
 
+bool SurfaceContact::on_face_plane(Index t, Index face) const {
+  if (t == face) return true;
+  const auto a = static_cast<std::size_t>(t), b = static_cast<std::size_t>(face);
+  if (triangle_copy_[a] != triangle_copy_[b] || rest_normals_[a].isZero() || rest_normals_[b].isZero()) return false;
+  if (!(rest_normals_[a].dot(rest_normals_[b]) > 1 - kFlatFold)) return false;
+  // The same plane, not a parallel one: t's corners on face's plane within rounding.
+  const Vec3 on = rest_y_.row(triangles_[b][0]).transpose();
+  for (const Index corner : triangles_[a]) {
+    if (!(std::abs(rest_normals_[b].dot(rest_y_.row(corner).transpose() - on)) <= kFlatFold * mean_edge_)) return false;
+  }
+  return true;
+}
+
 double SurfaceContact::guard_zero(const std::array<Index, 4>& corner, const std::array<double, 4>& w, Index triangle) const {
   const Vec3& rest_normal = rest_normals_[static_cast<std::size_t>(triangle)];
   const double slack = kGuardSlack * guard_allowance();
@@ -1925,6 +1938,22 @@ void SurfaceContact::lag_guards(const Points& start) {
     }
     return false;
   };
+  // Whether vertex v has a vertex guard on face t or on a triangle of t's copy in t's plane in the
+  // material. A copy moves affinely, so such a triangle stays in t's plane, turns as t does (the
+  // turn guards_share bounds), and a pair's zero (its g in the material) is the same on it: the
+  // guard holds v as an edge guard on t whose point is v would, up to rounding, but for the
+  // barrier and friction counted once instead of twice. (Leaving the edge guard out wherever
+  // `held` found the end held, on a nearby plane with its own zero and turn, let 81 sticks cross
+  // in 4 pairs at one frame; this form crossed too until joined vertices swung over a face got
+  // their guards, and since has not.)
+  const auto guarded_on_face = [&](Index v, Index t) {
+    const Index first_guard = first_vertex_guard_[static_cast<std::size_t>(v)];
+    if (first_guard < 0) return false;
+    for (auto i = static_cast<std::size_t>(first_guard); i < guard_vertex.size() && guard_vertex[i] == v; ++i) {
+      if (on_face_plane(guards_[i].triangle, t)) return true;
+    }
+    return false;
+  };
   // Whether r, from a point on edge e, points behind every face around e that has a normal: into
   // the material there (the material is the intersection of those half-spaces where e is convex,
   // their union where it is not: behind all of them is inside either way).
@@ -1967,6 +1996,12 @@ void SurfaceContact::lag_guards(const Points& start) {
           // Both ends held to this plane by their own guards hold the edge (g is linear along it).
           const Vec3 on = y_.row(tri[0]).transpose();
           if (held(corner[static_cast<std::size_t>(first)], normal, on) && held(corner[static_cast<std::size_t>(first) + 1], normal, on)) continue;
+          // Where the pair's point is an end of the edge (the other end's weight exactly 0) whose
+          // own vertex guard lies on this face's plane in its copy, that guard is this guard: the
+          // same plane, zero, wall and turn (see guarded_on_face). On the sliced ball the most
+          // active terms in a step fell from 22.5k to 16.8k, on the hand's 9.9k to 7.7k.
+          if (p.w[static_cast<std::size_t>(first) + 1] == 0 && guarded_on_face(corner[static_cast<std::size_t>(first)], t)) continue;
+          if (p.w[static_cast<std::size_t>(first)] == 0 && guarded_on_face(corner[static_cast<std::size_t>(first) + 1], t)) continue;
           collision::Proximity foot = p;
           for (double& w : foot.w) w *= sign;
           const double zero = guard_zero(corner, foot.w, t);

@@ -104,7 +104,9 @@
 // Edges too: every edge-edge pair of joined copies within dhat whose one edge lies on a face that
 // a face around the other edge's corners faces gets the same guard on the vector between their
 // closest points along that face's normal (its closest points held for the step), unless both
-// ends of the other edge are guarded against that plane already (g is linear along the edge),
+// ends of the other edge are guarded against that plane already (g is linear along the edge), or
+// the closest point is an end of the edge whose own vertex guard holds that face's plane (on the
+// face, or on a triangle of its copy in its plane in the material: the same guard),
 // and none for an edge inside a flat polygon of either side (see flat_edge_).
 // Found behind the whole allowance at a step's start, such a pair is guarded from where it is
 // where the edges have crossed into the material (the closest points inside both edges, behind
@@ -678,6 +680,10 @@ class SurfaceContact {
     double start_distance;
     Index triangle;  // whose plane it holds (a vertex guard's triangle, or a face around an edge guard's second edge)
   };
+  /// Whether triangle t is `face` or a triangle of its copy in its plane in the material (rest
+  /// normals within kFlatFold, corners on the plane within kFlatFold mean edges): one plane for
+  /// good, since a copy moves affinely.
+  bool on_face_plane(Index t, Index face) const;
   /// A guard's r = sum_i w_i corner_i at vertex positions (or motions) y.
   static Vec3 guard_vector(const Guard& guard, const Points& y);
   /// A guard's g at vertex positions y, less its zero.
