@@ -429,8 +429,7 @@ void SurfaceContact::set_surface(const MaterialSurface& surface, std::span<const
       if (edge_triangle_start_[e + 1] - edge_triangle_start_[e] != 2) continue;
       const auto t = static_cast<std::size_t>(edge_triangles_[static_cast<std::size_t>(edge_triangle_start_[e])]);
       const auto u = static_cast<std::size_t>(edge_triangles_[static_cast<std::size_t>(edge_triangle_start_[e]) + 1]);
-      if (triangle_copy_[t] != triangle_copy_[u] || rest_normals_[t].isZero() || rest_normals_[u].isZero()) continue;
-      if (rest_normals_[t].dot(rest_normals_[u]) > 1 - kFlatFold) flat_edge_[e] = 1;
+      if (parallel_in_one_copy(t, u)) flat_edge_[e] = 1;
     }
   });
   append_chunks(vertex_count, kNodeChunk, &vertex_listing, &scratch_.vertex_chunks, [&](Index begin, Index end, Listing* out) {
@@ -1777,11 +1776,15 @@ double SurfaceContact::leg_step(const Points& from, const Eigen::Map<const Point
   return std::min(t_guard, t_pairs);
 }
 
+bool SurfaceContact::parallel_in_one_copy(std::size_t t, std::size_t u) const {
+  return triangle_copy_[t] == triangle_copy_[u] && !rest_normals_[t].isZero() && !rest_normals_[u].isZero() &&
+         rest_normals_[t].dot(rest_normals_[u]) > 1 - kFlatFold;
+}
+
 bool SurfaceContact::on_face_plane(Index t, Index face) const {
   if (t == face) return true;
   const auto a = static_cast<std::size_t>(t), b = static_cast<std::size_t>(face);
-  if (triangle_copy_[a] != triangle_copy_[b] || rest_normals_[a].isZero() || rest_normals_[b].isZero()) return false;
-  if (!(rest_normals_[a].dot(rest_normals_[b]) > 1 - kFlatFold)) return false;
+  if (!parallel_in_one_copy(a, b)) return false;
   // The same plane, not a parallel one: t's corners on face's plane within rounding.
   const Vec3 on = rest_y_.row(triangles_[b][0]).transpose();
   for (const Index corner : triangles_[a]) {
@@ -1929,14 +1932,18 @@ void SurfaceContact::lag_guards(const Points& start) {
   // guarded on their parallel faces at two heights, counted as held on both planes, and the part
   // of it over the higher face had no guard on that face's plane
   // (AnEdgeAcrossParallelFacesAtTwoHeightsIsHeldOnEach).
-  const auto held = [&](Index v, const Vec3& normal, const Vec3& on) {
+  // Whether some vertex guard of v (its index i among the guards) satisfies pred(i).
+  const auto any_guard_of = [&](Index v, const auto& pred) {
     const Index first_guard = first_vertex_guard_[static_cast<std::size_t>(v)];
     if (first_guard < 0) return false;
-    const double height = normal.dot(y_.row(v).transpose() - on);
     for (auto i = static_cast<std::size_t>(first_guard); i < guard_vertex.size() && guard_vertex[i] == v; ++i) {
-      if (covers(guards_[i].normal, guard_height[i], normal, height)) return true;
+      if (pred(i)) return true;
     }
     return false;
+  };
+  const auto held = [&](Index v, const Vec3& normal, const Vec3& on) {
+    const double height = normal.dot(y_.row(v).transpose() - on);
+    return any_guard_of(v, [&](std::size_t i) { return covers(guards_[i].normal, guard_height[i], normal, height); });
   };
   // Whether vertex v has a vertex guard on face t or on a triangle of t's copy in t's plane in the
   // material. A copy moves affinely, so such a triangle stays in t's plane, turns as t does (the
@@ -1947,12 +1954,7 @@ void SurfaceContact::lag_guards(const Points& start) {
   // in 4 pairs at one frame; this form crossed too until joined vertices swung over a face got
   // their guards, and since has not.)
   const auto guarded_on_face = [&](Index v, Index t) {
-    const Index first_guard = first_vertex_guard_[static_cast<std::size_t>(v)];
-    if (first_guard < 0) return false;
-    for (auto i = static_cast<std::size_t>(first_guard); i < guard_vertex.size() && guard_vertex[i] == v; ++i) {
-      if (on_face_plane(guards_[i].triangle, t)) return true;
-    }
-    return false;
+    return any_guard_of(v, [&](std::size_t i) { return on_face_plane(guards_[i].triangle, t); });
   };
   // Whether r, from a point on edge e, points behind every face around e that has a normal: into
   // the material there (the material is the intersection of those half-spaces where e is convex,

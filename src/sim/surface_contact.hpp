@@ -684,6 +684,9 @@ class SurfaceContact {
   /// normals within kFlatFold, corners on the plane within kFlatFold mean edges): one plane for
   /// good, since a copy moves affinely.
   bool on_face_plane(Index t, Index face) const;
+  /// Whether triangles t and u are of one copy with rest normals within kFlatFold of each other
+  /// (both with a normal): in one plane where they share an edge (flat_edge_), parallel elsewhere.
+  bool parallel_in_one_copy(std::size_t t, std::size_t u) const;
   /// A guard's r = sum_i w_i corner_i at vertex positions (or motions) y.
   static Vec3 guard_vector(const Guard& guard, const Points& y);
   /// A guard's g at vertex positions y, less its zero.
