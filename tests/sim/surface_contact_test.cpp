@@ -516,6 +516,39 @@ TEST(SurfaceContact, HalvesFoundPressedBeyondTheAllowanceArePushedBackOut) {
   EXPECT_EQ(crossings(result.surface, copies, sim), 0);
 }
 
+// The simulator's positions with the nodes of one piece's copies moved rigidly: each to
+// place(its rest position).
+template <typename Place>
+Points with_piece_placed(const CutResult& result, const sim::Simulator& sim, Index piece, const Place& place) {
+  const TetMesh& mesh = result.mesh.mesh;
+  Points x = sim.positions();
+  for (Index t = 0; t < mesh.num_tets(); ++t) {
+    if (result.mesh.tet_piece[t] != piece) continue;
+    for (int k = 0; k < 4; ++k) {
+      const Index n = mesh.tets()(t, k);
+      x.row(n) = place(Vec3(mesh.rest().row(n).transpose())).transpose();
+    }
+  }
+  return x;
+}
+
+// Sides found crossed at the start (more than the check allows) are pushed back out: ten steps of
+// 0.01 s without gravity, each converging and leaving no crossing pair; after_step(step) adds a
+// test's own checks.
+template <typename AfterStep>
+void expect_pushed_out_in_ten_steps(sim::Simulator& sim, const MaterialSurface& surface, const std::vector<std::array<Index, 4>>& copies,
+                                    const AfterStep& after_step) {
+  ASSERT_GT(crossings(surface, copies, sim), 0);
+  sim::StepOptions options;
+  options.dt = 0.01;
+  options.gravity = Vec3::Zero();
+  for (int step = 0; step < 10; ++step) {
+    EXPECT_TRUE(sim.step(options).converged) << "step " << step;
+    after_step(step);
+    EXPECT_EQ(crossings(surface, copies, sim), 0) << "step " << step;
+  }
+}
+
 // Two sticks of a pile hinged about the line where they touch until their front faces, side by
 // side and facing the same way in the material, faced each other, and one's corner went 1.3
 // allowances into the other's front face with nothing to push it out (81 sticks, on one path).
@@ -532,7 +565,6 @@ TEST(SurfaceContact, ACornerSwungIntoAFaceItTouchedOnlyAtItsRimIsPushedBackOut) 
   CutBlock block;
   const CutResult& result = block.result;
   ASSERT_EQ(result.mesh.num_pieces(), 2);
-  const TetMesh& mesh = result.mesh.mesh;
   const auto& copies = block.cutter.tet_nodes();
   sim::Simulator& sim = block.sim;
   const Index left_piece = piece_left_of_cut(result);
@@ -542,15 +574,7 @@ TEST(SurfaceContact, ACornerSwungIntoAFaceItTouchedOnlyAtItsRimIsPushedBackOut) 
   ASSERT_GT(delta, 0);
   const Vec3 corner(0.43, 0, 0), to(0.465, 2 * delta, 0.03);
   const Eigen::Matrix3d turn = (Eigen::AngleAxisd(lean, Vec3::UnitX()) * Eigen::AngleAxisd(fold, Vec3::UnitZ())).toRotationMatrix();
-  Points x = sim.positions();
-  for (Index t = 0; t < mesh.num_tets(); ++t) {
-    if (result.mesh.tet_piece[t] != left_piece) continue;
-    for (int k = 0; k < 4; ++k) {
-      const Index n = mesh.tets()(t, k);
-      x.row(n) = (to + turn * (mesh.rest().row(n).transpose() - corner)).transpose();
-    }
-  }
-  sim.set_positions(x);
+  sim.set_positions(with_piece_placed(result, sim, left_piece, [&](const Vec3& r) -> Vec3 { return to + turn * (r - corner); }));
   // How far the corner lies behind the right half's front face (y = 0: the right half is at rest).
   Index corner_vertex = -1;
   for (Index n = 0; n < result.surface.surface.num_vertices(); ++n) {
@@ -559,15 +583,7 @@ TEST(SurfaceContact, ACornerSwungIntoAFaceItTouchedOnlyAtItsRimIsPushedBackOut) 
   ASSERT_GE(corner_vertex, 0);
   const auto depth = [&] { return result.surface.positions(copies, sim.positions())(corner_vertex, 1); };
   ASSERT_NEAR(depth(), 2 * delta, 1e-12);
-  ASSERT_GT(crossings(result.surface, copies, sim), 0);
-  sim::StepOptions options;
-  options.dt = 0.01;
-  options.gravity = Vec3::Zero();
-  for (int step = 0; step < 10; ++step) {
-    EXPECT_TRUE(sim.step(options).converged) << "step " << step;
-    EXPECT_GT(sim.surface_contact().guards, 0) << "step " << step;
-    EXPECT_EQ(crossings(result.surface, copies, sim), 0) << "step " << step;
-  }
+  expect_pushed_out_in_ten_steps(sim, result.surface, copies, [&](int step) { EXPECT_GT(sim.surface_contact().guards, 0) << "step " << step; });
   EXPECT_LT(depth(), 1.25 * delta);
 }
 
@@ -606,26 +622,11 @@ TEST(SurfaceContact, ARimFoundCrossedBeyondTheAllowanceIsPushedBackOut) {
   const double tilt = 0.08, along = 0.06, lift = 0.1;
   const double angle = -std::numbers::pi / 2 - tilt;
   const Vec3 pivot(cut_at, 0, 0), corner(cut_at - 0.5 * delta, along, lift);
-  Points x = sim.positions();
-  for (Index t = 0; t < mesh.num_tets(); ++t) {
-    if (result.mesh.tet_piece[t] != right_piece) continue;
-    for (int k = 0; k < 4; ++k) {
-      const Index n = mesh.tets()(t, k);
-      const Vec3 d = mesh.rest().row(n).transpose() - pivot;
-      x.row(n) = (corner + Vec3(std::cos(angle) * d.x() - std::sin(angle) * d.y(), std::sin(angle) * d.x() + std::cos(angle) * d.y(), d.z()))
-                     .transpose();
-    }
-  }
-  sim.set_positions(x);
-  const auto& copies = cutter.tet_nodes();
-  ASSERT_GT(crossings(result.surface, copies, sim), 0);
-  sim::StepOptions options;
-  options.dt = 0.01;
-  options.gravity = Vec3::Zero();
-  for (int step = 0; step < 10; ++step) {
-    EXPECT_TRUE(sim.step(options).converged) << "step " << step;
-    EXPECT_EQ(crossings(result.surface, copies, sim), 0) << "step " << step;
-  }
+  sim.set_positions(with_piece_placed(result, sim, right_piece, [&](const Vec3& r) -> Vec3 {
+    const Vec3 d = r - pivot;
+    return corner + Vec3(std::cos(angle) * d.x() - std::sin(angle) * d.y(), std::sin(angle) * d.x() + std::cos(angle) * d.y(), d.z());
+  }));
+  expect_pushed_out_in_ten_steps(sim, result.surface, cutter.tet_nodes(), [](int) {});
 }
 
 // A tube-shaped crack inside a block (a cylinder's side, wholly in the material, so that no rim
