@@ -1811,18 +1811,6 @@ void SurfaceContact::lag_guards(const Points& start) {
   cover(start, nullptr, 0);
   measure(kJoined);
   const double dhat = settings_.thickness, delta = guard_allowance();
-  // Every triangle's unit normal at the step's start, once: the scans below asked for one per
-  // face they looked at, 40k a step on the sliced ball (35k of them for 9k edge pairs' faces),
-  // of 24.8k triangles. O(F), in parallel.
-  const auto F = static_cast<Index>(triangles_.size());
-  start_normals_.resize(triangles_.size());
-  for_chunks(F, kNodeChunk, [&](Index begin, Index end, Index) {
-    for (Index t = begin; t < end; ++t) {
-      const auto& tri = triangles_[static_cast<std::size_t>(t)];
-      start_normals_[static_cast<std::size_t>(t)] =
-          unit_normal(y_.row(tri[0]).transpose(), y_.row(tri[1]).transpose(), y_.row(tri[2]).transpose(), dhat);
-    }
-  });
   struct Found {
     Index vertex;
     double inside;  // the smallest barycentric coordinate of the foot
@@ -1836,7 +1824,9 @@ void SurfaceContact::lag_guards(const Points& start) {
   // than kFacing against it at the step's start).
   const auto swung_to_face = [&](Index v, const Vec3& normal) {
     for (Index i = vertex_triangle_start_[v]; i < vertex_triangle_start_[v + 1]; ++i) {
-      if (start_normals_[static_cast<std::size_t>(vertex_triangles_[i])].dot(normal) < -kFacing) return true;
+      const auto& tri = triangles_[static_cast<std::size_t>(vertex_triangles_[i])];
+      const Vec3 n = unit_normal(y_.row(tri[0]).transpose(), y_.row(tri[1]).transpose(), y_.row(tri[2]).transpose(), dhat);
+      if (n.dot(normal) < -kFacing) return true;
     }
     return false;
   };
@@ -1857,7 +1847,7 @@ void SurfaceContact::lag_guards(const Points& start) {
       const std::array<Index, 4> corner = corners(c);
       const Vec3 p = y_.row(corner[0]).transpose(), a = y_.row(corner[1]).transpose(), b = y_.row(corner[2]).transpose(),
                  q = y_.row(corner[3]).transpose();
-      const Vec3& normal = start_normals_[static_cast<std::size_t>(c.b)];  // outward: the triangle's material is behind it
+      const Vec3 normal = unit_normal(a, b, q, dhat);  // outward: the triangle's material is behind it
       if (normal.isZero()) continue;
       const Vec3 cross = (b - a).cross(q - a);
       const double area2 = cross.squaredNorm();
@@ -1972,7 +1962,8 @@ void SurfaceContact::lag_guards(const Points& start) {
   const auto behind_faces = [&](std::size_t e, const Vec3& r) {
     bool any = false;
     for (Index i = edge_triangle_start_[e]; i < edge_triangle_start_[e + 1]; ++i) {
-      const Vec3& normal = start_normals_[static_cast<std::size_t>(edge_triangles_[static_cast<std::size_t>(i)])];
+      const auto& tri = triangles_[static_cast<std::size_t>(edge_triangles_[static_cast<std::size_t>(i)])];
+      const Vec3 normal = unit_normal(y_.row(tri[0]).transpose(), y_.row(tri[1]).transpose(), y_.row(tri[2]).transpose(), dhat);
       if (normal.isZero()) continue;
       if (!(normal.dot(r) < 0)) return false;
       any = true;
@@ -2002,7 +1993,7 @@ void SurfaceContact::lag_guards(const Points& start) {
           const auto& tri = triangles_[static_cast<std::size_t>(t)];
           const Index face = i - edge_triangle_start_[edge];
           if (face < kFacesPerEdge ? !(c.faces & (1 << (bit + face))) : !ends_face(corner, first, t)) continue;
-          const Vec3& normal = start_normals_[static_cast<std::size_t>(t)];
+          const Vec3 normal = unit_normal(y_.row(tri[0]).transpose(), y_.row(tri[1]).transpose(), y_.row(tri[2]).transpose(), dhat);
           if (normal.isZero()) continue;
           // Both ends held to this plane by their own guards hold the edge (g is linear along it).
           const Vec3 on = y_.row(tri[0]).transpose();

@@ -704,7 +704,6 @@ class SurfaceContact {
   static constexpr double kGuardSlack = 1e-6;
   std::vector<Guard> guards_;
   std::vector<Index> first_vertex_guard_;  // lag_guards' scratch: per vertex its first guard, or -1
-  std::vector<Vec3> start_normals_;        // lag_guards' scratch: per triangle its unit normal at the start
   bool sutures_changed_ = false;
   Points rest_y_;
   // Per triangle its unit normal in the material; per vertex its triangles (CSR).
