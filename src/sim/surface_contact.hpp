@@ -287,8 +287,7 @@ class SurfaceContact {
   /// foot on it held for the step; and each edge-edge pair of joined copies within dhat with one
   /// edge on a face the other's faces face, unless both ends of that edge are guarded against the
   /// plane already, and not behind it by more than the allowance unless crossed into the
-  /// material (see "Guards" above). O(F + candidates), in parallel (every triangle's normal at
-  /// `start` once, then the candidates).
+  /// material (see "Guards" above). O(candidates), in parallel.
   void lag_guards(const Points& start);
   Index num_guards() const { return static_cast<Index>(guards_.size()); }
   /// For tests: how far the deepest guarded vertex or edge lies behind its triangle's own plane
