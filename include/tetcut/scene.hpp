@@ -28,9 +28,11 @@
 //     "obstacles": [{"plane": {"point", "normal"}} | {"sphere": {"centre", "radius"}}
 //                   | {"box": {"min", "max"}}, and optionally "friction": mu (Coulomb; 0 by default)],
 //     "contact_stiffness": K
-//     "self_collision": true | false | {"thickness": m, "stiffness": N/m, "friction": mu}   contact of the material
-//                   surface with itself and between pieces (Simulator::set_contact_surface); off
-//                   by default (see the README for its cost)
+//     "self_collision": true | false | {"thickness": m, "stiffness": N/m, "friction": mu,
+//                   "cushion": thicknesses}   contact of the material surface with itself and
+//                   between pieces (Simulator::set_contact_surface); off by default (see the
+//                   README for its cost); "cushion": how far the sides of a cut are pushed apart
+//                   so that they can slide along it (SurfaceContactOptions::cushion, 0 by default)
 //     "cuts":      [{"time", "space": "rest"|"world", and one of
 //                    "triangles": PATH | "plane": {"centre", "normal", "size"}
 //                    | "cylinder": {"centre", "axis", "radius", "length", "segments"}

@@ -244,6 +244,13 @@ struct SurfaceContactOptions {
   /// start, and slips below a hundredth of the thickness are resisted as by a stiff spring
   /// (static friction). Against obstacles: Obstacle::friction.
   double friction = 0;
+  /// How far apart (in thicknesses) the guards push the two sides of a cut, which coincide when
+  /// it is made (0: not at all; the sides stay pressed within the guards' allowance). With 1 a
+  /// cut opens by up to a thickness over the 30 steps after it is made, and a side resting on
+  /// its cut then slides along it as on any surface; without, it slides only about a tet before
+  /// the barrier of the other side's rims, a gap of about 0 away, holds it (docs/contact.md).
+  /// Costs more where cut sides press together: each guard is active up to the cushion.
+  double cushion = 0;
 };
 
 struct SimulatorState;

@@ -115,12 +115,16 @@ void bind_sim(py::module_& root) {
       .def_readonly("contact_seconds", &StepReport::contact_seconds);
 
   py::class_<SurfaceContactOptions>(m, "SurfaceContactOptions",
-                                    "Contact of the material surface with itself: thickness (m), stiffness (N/m), friction (0 = defaults / none).")
-      .def(py::init([](double thickness, double stiffness, double friction) { return SurfaceContactOptions{thickness, stiffness, friction}; }),
-           py::arg("thickness") = 0.0, py::arg("stiffness") = 0.0, py::arg("friction") = 0.0)
+                                    "Contact of the material surface with itself: thickness (m), stiffness (N/m), friction (0 = defaults / none), "
+                                    "cushion (thicknesses the two sides of a cut are pushed apart; 0 = none).")
+      .def(py::init([](double thickness, double stiffness, double friction, double cushion) {
+             return SurfaceContactOptions{thickness, stiffness, friction, cushion};
+           }),
+           py::arg("thickness") = 0.0, py::arg("stiffness") = 0.0, py::arg("friction") = 0.0, py::arg("cushion") = 0.0)
       .def_readwrite("thickness", &SurfaceContactOptions::thickness)
       .def_readwrite("stiffness", &SurfaceContactOptions::stiffness)
-      .def_readwrite("friction", &SurfaceContactOptions::friction);
+      .def_readwrite("friction", &SurfaceContactOptions::friction)
+      .def_readwrite("cushion", &SurfaceContactOptions::cushion);
 
   py::class_<Obstacle>(m, "Obstacle", "A solid the contact points are kept out of: Obstacle.plane, .sphere or .box.")
       .def_static("plane", [](py::handle point, py::handle normal) { return Obstacle::plane(vec3(point, "point"), vec3(normal, "normal")); },

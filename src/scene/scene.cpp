@@ -407,14 +407,15 @@ Scene parse_scene(std::string_view text, const std::filesystem::path& path) {
   }
   if (const auto k = root.get("contact_stiffness")) scene.contact_stiffness = k->positive();
   if (const auto self = root.get("self_collision")) {
-    // true | false | {"thickness": m, "stiffness": N/m, "friction": mu} (each may be left to its
-    // default; friction 0).
+    // true | false | {"thickness": m, "stiffness": N/m, "friction": mu, "cushion": thicknesses}
+    // (each may be left to its default; friction and cushion 0).
     if (self->is_object()) {
-      self->allow({"thickness", "stiffness", "friction"});
+      self->allow({"thickness", "stiffness", "friction", "cushion"});
       scene.self_collision = true;
       if (const auto t = self->get("thickness")) scene.self_contact.thickness = t->positive();
       if (const auto k = self->get("stiffness")) scene.self_contact.stiffness = k->positive();
       if (const auto mu = self->get("friction")) scene.self_contact.friction = mu->non_negative();
+      if (const auto cushion = self->get("cushion")) scene.self_contact.cushion = cushion->non_negative();
     } else {
       scene.self_collision = self->boolean();
     }

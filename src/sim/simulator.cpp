@@ -203,9 +203,10 @@ void Simulator::set_contact_surface(const MaterialSurface& surface, const Surfac
     }
   }
   if (!surface.vertex_weights.allFinite() || !t.vertices.allFinite()) throw Error(ErrorKind::kInvalidArgument, "contact surface: not finite");
-  if (!(options.thickness >= 0) || !(options.stiffness >= 0) || !(options.friction >= 0) || !std::isfinite(options.thickness) ||
-      !std::isfinite(options.stiffness) || !std::isfinite(options.friction)) {
-    throw Error(ErrorKind::kInvalidArgument, "contact surface: thickness, stiffness and friction must not be negative");
+  for (const double value : {options.thickness, options.stiffness, options.friction, options.cushion}) {
+    if (!(value >= 0) || !std::isfinite(value)) {
+      throw Error(ErrorKind::kInvalidArgument, "contact surface: thickness, stiffness, friction and cushion must not be negative");
+    }
   }
   std::vector<std::array<Index, 4>> copy_nodes(s.elements.size());
   for (std::size_t e = 0; e < s.elements.size(); ++e) copy_nodes[e] = s.elements[e].nodes;

@@ -179,6 +179,28 @@ double barrier_second(double d, double dhat) {
   return -2 * std::log(d / dhat) - 4 * q + q * q;
 }
 
+double guard_energy(double g, double wall, double cushion, double kappa, double* first, double* second) {
+  *first = *second = 0;
+  if (!(g < cushion) && !(g < 0)) return 0;
+  const double height = g + wall;
+  if (!(height > 0)) return std::numeric_limits<double>::infinity();
+  double energy = 0;
+  // The cushion: a spring pushing the side up to `cushion` above the zero.
+  if (cushion > 0 && g < cushion) {
+    const double under = cushion - g;
+    energy = 0.5 * kappa * under * under;
+    *first = -kappa * under;
+    *second = kappa;
+  }
+  // Below the zero the barrier, which holds the side above its wall.
+  if (g < 0) {
+    energy += kappa * barrier(height, wall);
+    *first += kappa * barrier_first(height, wall);
+    *second += kappa * barrier_second(height, wall);
+  }
+  return energy;
+}
+
 double pair_energy(const std::array<Vec3, 4>& y, bool edges, double dhat, double kappa, collision::Vec12* gradient,
                    collision::Mat12* hessian) {
   const collision::Proximity p = proximity_at(y, edges);
@@ -237,6 +259,8 @@ void SurfaceContact::lag_friction(const Points& start) {
 void SurfaceContact::reset() {
   clear_surface();
   joins_.clear();
+  copy_cut_step_.clear();
+  steps_ = 0;
   sutured_.clear();
   suture_pairs_.clear();
 }
@@ -299,6 +323,11 @@ void SurfaceContact::set_surface(const MaterialSurface& surface, std::span<const
   const TriangleSurface& s = surface.surface;
   const auto V = static_cast<std::size_t>(s.num_vertices()), F = static_cast<std::size_t>(s.num_triangles());
   copy_nodes_.assign(copy_nodes.begin(), copy_nodes.end());
+  // The cushion grows anew between copies a cut made or changed.
+  copy_cut_step_.resize(copy_nodes_.size(), steps_);
+  for (std::size_t copy = 0; copy < std::min(changed.size(), copy_cut_step_.size()); ++copy) {
+    if (changed[copy]) copy_cut_step_[copy] = steps_;
+  }
   vertex_nodes_.resize(V);
   vertex_weights_.resize(V);
   vertex_copy_.resize(V);
@@ -411,6 +440,7 @@ void SurfaceContact::set_surface(const MaterialSurface& surface, std::span<const
   settings_.thickness = options.thickness > 0 ? options.thickness : 0.1 * mean_edge_;
   settings_.stiffness = options.stiffness > 0 ? options.stiffness : youngs_modulus * mean_edge_;
   settings_.friction = options.friction;
+  settings_.cushion = options.cushion * settings_.thickness;
   rest_y_ = s.vertices;
   find_pieces(static_cast<Index>(rest.rows()));
   // Rest normals, for the guards (lag_guards).
@@ -752,24 +782,18 @@ void SurfaceContact::collect_active(const Points& at) {
       }
       return;
     }
-    // The guards: the barrier on g + wall with thickness wall, zero while g >= 0.
+    // The guards: the barrier on g + wall with thickness wall + cushion, zero while g >= cushion.
     const Index first = (chunk - pair_chunks) * kNodeChunk;
     for (Index k = first; k < std::min(guard_count, first + kNodeChunk); ++k) {
       const Guard& guard = guards_[static_cast<std::size_t>(k)];
-      const double wall = guard.wall;
       const double g = guard_gap(guard, y_);  // y_: the vertices at `at` (cover)
-      if (g >= 0) continue;
+      if (g >= guard.cushion) continue;
       ActiveTerm& a = out.emplace_back();
       guard_term(guard, &a.term);
-      if (!(g + wall > 0)) {
-        a.energy = kInfinity;
-        a.gradient.setZero();
-        a.hessian.setZero();
-        continue;
-      }
-      a.energy = kappa * barrier(g + wall, wall);
-      a.gradient = kappa * barrier_first(g + wall, wall) * guard.normal;
-      a.hessian = kappa * barrier_second(g + wall, wall) * guard.normal * guard.normal.transpose();
+      double first_derivative = 0, second_derivative = 0;
+      a.energy = guard_energy(g, guard.wall, guard.cushion, kappa, &first_derivative, &second_derivative);
+      a.gradient = first_derivative * guard.normal;
+      a.hessian = second_derivative * guard.normal * guard.normal.transpose();
     }
   });
   active_at_ = at;
@@ -1907,8 +1931,10 @@ void SurfaceContact::lag_guards(const Points& start) {
         covered = covers(guards_[h].normal, guard_height[h], found[j].normal, found[j].height);
       }
       if (covered) continue;
+      const std::uint64_t copies = candidates_[found[j].k].copies;
       guards_.push_back({corners(candidates_[found[j].k]), {1.0, -found[j].beta[0], -found[j].beta[1], -found[j].beta[2]}, found[j].normal,
-                         found[j].zero, found[j].wall, found[j].r, found[j].r.norm(), candidates_[found[j].k].b});
+                         found[j].zero, found[j].wall, found[j].r, found[j].r.norm(), candidates_[found[j].k].b,
+                         guard_cushion(static_cast<Index>(copies >> 32), static_cast<Index>(copies & 0xffffffffu))});
       guard_vertex.push_back(found[j].vertex);
       guard_height.push_back(found[j].height);
     }
@@ -2018,7 +2044,8 @@ void SurfaceContact::lag_guards(const Points& start) {
           // outside its material) it passed nothing.
           if (!(g > -delta) && !(p.free == 2 && behind_faces(edge, sign * p.r))) continue;
           // Its friction's start: r turned as the guard's (from the faces to the first edge).
-          out->push_back({corner, foot.w, normal, zero, guard_wall(g, delta), sign * p.r, p.distance, t});
+          out->push_back({corner, foot.w, normal, zero, guard_wall(g, delta), sign * p.r, p.distance, t,
+                          guard_cushion(static_cast<Index>(c.copies >> 32), static_cast<Index>(c.copies & 0xffffffffu))});
         }
       }
     }
@@ -2040,7 +2067,19 @@ void SurfaceContact::index_guard_triangles() {
   }
 }
 
+double SurfaceContact::guard_cushion(Index copy_a, Index copy_b) const {
+  if (!(settings_.cushion > 0)) return 0;
+  const auto cut_step = [&](Index copy) {
+    return static_cast<std::size_t>(copy) < copy_cut_step_.size() ? copy_cut_step_[static_cast<std::size_t>(copy)] : steps_;
+  };
+  const auto age = static_cast<double>(steps_ - std::max(cut_step(copy_a), cut_step(copy_b)));
+  // Grown at a steady rate: sides that follow it part at cushion / kCushionSteps a step, and go
+  // on at that speed once it stops where nothing else holds them (its spring only pushes).
+  return settings_.cushion * std::clamp(age / kCushionSteps, 0.0, 1.0);
+}
+
 void SurfaceContact::update_joins(const Points& at) {
+  ++steps_;
   if (!enabled() || joins_.empty()) return;
   const PartTimer timer(&part_seconds_.joins, &part_seconds_.rebuild);
   cover(at, nullptr, 0);

@@ -119,6 +119,16 @@
 // neighbour's corner, all its pairs there touching in the material (36 sticks: up to 100 crossing
 // pairs; Figure 4 over 0.35 s: 585; none with them, a piled step 3.4 times as long on 36 sticks).
 // Pulled apart, guards exert no force (g > 0), and the join ends once no pair is within dhat.
+// A cushion (Settings::cushion, 0 unless asked for) adds to each guard a spring of stiffness
+// kappa pushing its side up to the cushion above the zero, 0.5 kappa (cushion - g)^2 for
+// g < cushion, the cushion grown at a steady rate over kCushionSteps steps after the later of
+// its copies' last cuts. Held a thickness apart, the sides slide along the cut as any surfaces
+// do: pressed within the allowance, a side that slid a few centimetres meets the other side's
+// rims and copies it was never joined with at a gap of about 0, where their barrier, counted,
+// holds it (a ball sliced at 31 degrees kept its cap, frictionless). The spring only pushes: its
+// energy is convex and C1, and the barrier below the zero keeps its wall. Grown at once, it
+// sprang the sides apart; grown steadily, sides that follow it drift apart at about its rate
+// where nothing else holds them.
 // Why this should not miss a real collision for long, and where it does: copies are joined only
 // while some of their surfaces are still touching where they were cut apart; a copy spans one
 // tet, so only the two sides of a cut within a tet of each other are affected, and there they are
@@ -181,6 +191,11 @@ double barrier(double d, double dhat);
 double barrier_first(double d, double dhat);
 double barrier_second(double d, double dhat);
 
+/// A guard's energy in its gap g over its zero (see Guards): below the zero the barrier
+/// kappa b(g + wall; wall), +inf at g <= -wall; with a cushion, below it as well the spring
+/// 0.5 kappa (cushion - g)^2. Its first and second derivatives in g into *first and *second.
+double guard_energy(double g, double wall, double cushion, double kappa, double* first, double* second);
+
 /// A pair's energy kappa b(d) at corners y (point and triangle, or two segments when `edges`),
 /// with its exact gradient and Hessian in the 12 corner coordinates when asked (for checks; the
 /// simulator's Newton matrix takes the positive semi-definite part, see above).
@@ -227,6 +242,7 @@ class SurfaceContact {
     double thickness = 0;  ///< dhat
     double stiffness = 0;  ///< kappa
     double friction = 0;   ///< Coulomb coefficient mu (0: none)
+    double cushion = 0;    ///< how far above the cut the guards push its sides, once grown (m)
   };
 
   bool enabled() const { return !triangles_.empty(); }
@@ -304,6 +320,12 @@ class SurfaceContact {
   /// The allowance: how far behind its guard's triangle a vertex may go (a tenth of dhat).
   double guard_allowance() const { return kGuardShare * settings_.thickness; }
   static constexpr double kGuardShare = 0.1;
+  /// Over how many steps after a cut the guards' cushion grows from 0 to Settings::cushion
+  /// (see Guards): so that the sides part gently, not sprung apart at once.
+  static constexpr int kCushionSteps = 30;
+  /// The cushion of a guard between copies a and b: Settings::cushion times the share of
+  /// kCushionSteps passed since the later of the copies' last cuts.
+  double guard_cushion(Index copy_a, Index copy_b) const;
   /// Pairs of neighbouring copies (sharing a node; see faces_across_cut) facing each other
   /// across a cut closer than this many thicknesses in the material are left to the guards:
   /// beyond dhat, so that none pushes at rest, and beyond it again, so that the two sides of a
@@ -679,6 +701,9 @@ class SurfaceContact {
     Vec3 start_r;
     double start_distance;
     Index triangle;  // whose plane it holds (a vertex guard's triangle, or a face around an edge guard's second edge)
+    // How far above its zero the barrier reaches (guard_cushion): the cushion that parts the two
+    // sides of the cut, grown since the cut.
+    double cushion;
   };
   /// Whether triangle t is `face` or a triangle of its copy in its plane in the material (rest
   /// normals within kFlatFold, corners on the plane within kFlatFold mean edges): one plane for
@@ -702,6 +727,10 @@ class SurfaceContact {
   double guard_depth(const Guard& guard) const;
   static constexpr double kGuardSlack = 1e-6;
   std::vector<Guard> guards_;
+  // Steps ended (update_joins), and per copy the count when a cut last changed it: the cushion's
+  // age. Kept across surfaces, as the copies are.
+  std::int64_t steps_ = 0;
+  std::vector<std::int64_t> copy_cut_step_;
   std::vector<Index> first_vertex_guard_;  // lag_guards' scratch: per vertex its first guard, or -1
   bool sutures_changed_ = false;
   Points rest_y_;

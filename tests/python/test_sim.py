@@ -337,3 +337,6 @@ def test_surface_contact_keeps_a_falling_block_on_another():
     assert without < 0
     with pytest.raises(tetcut.Error):
         tetcut.sim.Simulator(V, T, tetcut.sim.Material()).set_contact_surface(surface, tetcut.sim.SurfaceContactOptions(thickness=-1))
+    assert tetcut.sim.SurfaceContactOptions(cushion=1).cushion == 1
+    with pytest.raises(tetcut.Error):
+        tetcut.sim.Simulator(V, T, tetcut.sim.Material()).set_contact_surface(surface, tetcut.sim.SurfaceContactOptions(cushion=-1))

@@ -367,15 +367,19 @@ TEST(Scene, SelfCollisionIsReadAndReported) {
   EXPECT_NE(load_error(base + R"("self_collision": {"thickness": -1}})").find("self_collision.thickness: must be positive"), std::string::npos);
   EXPECT_NE(load_error(base + R"("self_collision": {"restitution": 1}})").find("self_collision: unknown key 'restitution'"), std::string::npos);
   EXPECT_NE(load_error(base + R"("self_collision": {"friction": -0.5}})").find("self_collision.friction: must not be negative"), std::string::npos);
+  EXPECT_NE(load_error(base + R"("self_collision": {"cushion": -1}})").find("self_collision.cushion: must not be negative"), std::string::npos);
   testing::TempDir dir;
   const Scene plain = load_scene(write_scene(dir.path(), base + R"("self_collision": true})"));
   EXPECT_TRUE(plain.self_collision);
   EXPECT_EQ(plain.self_contact.thickness, 0);  // the simulator's default
-  const Scene tuned = load_scene(write_scene(dir.path(), base + R"("self_collision": {"thickness": 0.01, "stiffness": 5e3, "friction": 0.4}})"));
+  EXPECT_EQ(plain.self_contact.cushion, 0);
+  const Scene tuned =
+      load_scene(write_scene(dir.path(), base + R"("self_collision": {"thickness": 0.01, "stiffness": 5e3, "friction": 0.4, "cushion": 0.5}})"));
   EXPECT_TRUE(tuned.self_collision);
   EXPECT_EQ(tuned.self_contact.thickness, 0.01);
   EXPECT_EQ(tuned.self_contact.stiffness, 5e3);
   EXPECT_EQ(tuned.self_contact.friction, 0.4);
+  EXPECT_EQ(tuned.self_contact.cushion, 0.5);
   EXPECT_FALSE(load_scene(write_scene(dir.path(), base + R"("self_collision": false})")).self_collision);
 
   // The halves of a fresh cut pulled apart: contact on, nothing crosses, the summary says what

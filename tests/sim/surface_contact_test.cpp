@@ -244,6 +244,52 @@ TEST(SurfaceContact, GradientMatchesFiniteDifferences) {
   EXPECT_LT(total.norm(), 1e-9 * (1 + std::abs(energy)));
 }
 
+// A guard's energy in its gap, with and without a cushion: its derivatives against central
+// differences wherever it is smooth (within its allowance, near its wall, and, with a cushion,
+// between the zero and the cushion), continuous with its derivative at the zero and at the
+// cushion (C1), convex, 0 beyond, infinite at the wall.
+TEST(SurfaceContact, GuardEnergyMatchesFiniteDifferences) {
+  const double wall = 7.5e-4, kappa = 3e4;
+  for (const double cushion : {0.0, 0.01}) {
+    const auto energy = [&](double g, double* first = nullptr, double* second = nullptr) {
+      double d1 = 0, d2 = 0;
+      const double e = sim::detail::guard_energy(g, wall, cushion, kappa, &d1, &d2);
+      if (first) *first = d1;
+      if (second) *second = d2;
+      return e;
+    };
+    for (const double g : {-0.999 * wall, -0.9 * wall, -0.5 * wall, -0.1 * wall, -1e-5, 1e-5, 0.3 * cushion, 0.9 * cushion}) {
+      if (!(g < cushion) && !(g < 0)) continue;  // 0 there
+      double first = 0, second = 0;
+      energy(g, &first, &second);
+      const double h = 1e-6 * wall;
+      double first_plus = 0, first_minus = 0;
+      const double numeric_first = (energy(g + h) - energy(g - h)) / (2 * h);
+      energy(g + h, &first_plus);
+      energy(g - h, &first_minus);
+      const double numeric_second = (first_plus - first_minus) / (2 * h);
+      EXPECT_NEAR(first, numeric_first, 1e-5 * std::abs(numeric_first) + 1e-9) << "cushion " << cushion << ", g " << g;
+      EXPECT_NEAR(second, numeric_second, 1e-5 * std::abs(numeric_second) + 1e-3) << "cushion " << cushion << ", g " << g;
+      EXPECT_GT(second, 0) << "cushion " << cushion << ", g " << g;
+      EXPECT_LT(first, 0) << "cushion " << cushion << ", g " << g;  // it pushes the side up
+    }
+    // Continuous, with its first derivative, at the zero and at the cushion.
+    for (const double at : {0.0, cushion}) {
+      const double h = 1e-12;
+      double below = 0, above = 0;
+      EXPECT_NEAR(energy(at - h, &below), energy(at + h, &above), 1e-9);
+      EXPECT_NEAR(below, above, 1e-6 * (1 + std::abs(below)));
+    }
+    EXPECT_EQ(energy(std::max(cushion, 0.0) + 1e-6), 0);
+    EXPECT_TRUE(std::isinf(energy(-wall)));
+    if (cushion > 0) {
+      double first = 0;
+      EXPECT_DOUBLE_EQ(energy(0, &first), 0.5 * kappa * cushion * cushion);  // the spring alone at the zero
+      EXPECT_DOUBLE_EQ(first, -kappa * cushion);
+    }
+  }
+}
+
 TEST(SurfaceContact, CollidingBlocksDoNotInterpenetrateAndKeepTheirMomentum) {
   const TetMesh mesh = two_blocks(0.05);
   Cutter cutter(mesh);
@@ -1791,7 +1837,7 @@ TEST(SurfaceContact, AnEdgeAcrossParallelFacesAtTwoHeightsIsHeldOnEach) {
 // held by nothing but the fresh cut's guards (the sides coincide, so no pair of them is in the
 // barrier). How far the upper half's nodes moved down the incline, on average, after `steps`
 // steps of 0.01 s; every step checked for crossings.
-double slide_down_the_cut(double degrees, double friction, int steps) {
+double slide_down_the_cut(double degrees, double friction, int steps, double cushion = 0, int settle = 0) {
   Cutter cutter(make_grid({Vec3(0, 0, 0), Vec3(1, 1, 1)}, {4, 4, 4}, 5));
   cutter.cut(plane_square(Vec3(0.5, 0.5, 0.43), Vec3(0, 0, 1), 3));
   const CutResult result = cutter.result();
@@ -1802,6 +1848,7 @@ double slide_down_the_cut(double degrees, double friction, int steps) {
   sim::Simulator sim(mesh, material, result.mesh.material_fractions());
   sim::SurfaceContactOptions options;
   options.friction = friction;
+  options.cushion = cushion;
   sim.set_contact_surface(result.surface, options);
   EXPECT_GT(sim.surface_contact().joined_copy_pairs, 0);
   Index lower = -1;
@@ -1821,6 +1868,11 @@ double slide_down_the_cut(double degrees, double friction, int steps) {
   const double angle = degrees * std::numbers::pi / 180;
   sim::StepOptions step;
   step.dt = 0.01;
+  // Settling first, under gravity across the cut, at rest: where the slide is measured from.
+  step.gravity = Vec3(0, 0, -9.81);
+  for (int s = 0; s < settle; ++s) sim.step(step);
+  const Points from = sim.positions();
+  sim.set_velocities(Points::Zero(sim.num_nodes(), 3));
   step.gravity = 9.81 * Vec3(std::sin(angle), 0, -std::cos(angle));
   for (int s = 0; s < steps; ++s) {
     sim.step(step);
@@ -1830,7 +1882,7 @@ double slide_down_the_cut(double degrees, double friction, int steps) {
   Index count = 0;
   for (Index n = 0; n < mesh.num_nodes(); ++n) {
     if (!upper[static_cast<std::size_t>(n)]) continue;
-    moved += sim.positions()(n, 0) - mesh.rest()(n, 0);
+    moved += sim.positions()(n, 0) - from(n, 0);
     ++count;
   }
   return moved / static_cast<double>(count);
@@ -1856,6 +1908,75 @@ TEST(SurfaceContact, FrictionBetweenTheSidesOfACutHoldsAndSlidesAsCoulombSays) {
   EXPECT_NEAR(sliding, coulomb_slide(40, 0.5, 0.1), 0.15 * coulomb_slide(40, 0.5, 0.1));
   const double held = slide_down_the_cut(20, 0.5, 30);
   EXPECT_LT(std::abs(held), 0.05 * coulomb_slide(20, 0, 0.3));
+}
+
+// With a cushion, once it has grown (settled first, gravity across the cut), the two sides of a
+// cut slide along each other as on any surface: frictionless, as g sin on the incline (without
+// it 0.07 of 0.28: held at the other side's rims, FrictionBetweenTheSidesOfACut... above); with
+// friction, as Coulomb says, above the friction angle and below it. (While the cushion grows,
+// lifting the upper half, the lagged normal forces are larger than its weight's share, and so is
+// the friction.)
+TEST(SurfaceContact, WithACushionTheSidesOfACutSlideAlongItAsCoulombSays) {
+  constexpr int kSettle = sim::detail::SurfaceContact::kCushionSteps + 5;
+  const double frictionless = slide_down_the_cut(40, 0, 30, 1, kSettle);
+  EXPECT_NEAR(frictionless, coulomb_slide(40, 0, 0.3), 0.15 * coulomb_slide(40, 0, 0.3));
+  const double sliding = slide_down_the_cut(40, 0.5, 30, 1, kSettle);
+  EXPECT_NEAR(sliding, coulomb_slide(40, 0.5, 0.3), 0.15 * coulomb_slide(40, 0.5, 0.3));
+  const double held = slide_down_the_cut(20, 0.5, 30, 1, kSettle);
+  EXPECT_LT(std::abs(held), 0.05 * coulomb_slide(20, 0, 0.3));
+}
+
+// The cushion parts the halves of a block cut in two, floating free, gently: they follow it as
+// it grows, about a thickness over kCushionSteps steps, and drift on apart at about the rate it
+// grew at (its spring only pushes; nothing else holds them here), with no pair crossed. Without
+// a cushion they stay together.
+TEST(SurfaceContact, ACushionPartsTheSidesOfAFreshCutGently) {
+  constexpr int kGrowth = sim::detail::SurfaceContact::kCushionSteps;
+  const auto part = [](double cushion, double* speed) {
+    Cutter cutter(make_grid({Vec3(0, 0, 0), Vec3(1, 1, 1)}, {4, 4, 4}, 5));
+    cutter.cut(plane_square(Vec3(0.5, 0.5, 0.43), Vec3(0, 0, 1), 3));
+    const CutResult result = cutter.result();
+    const TetMesh& mesh = result.mesh.mesh;
+    sim::Simulator sim(mesh, soft(), result.mesh.material_fractions());
+    sim::SurfaceContactOptions options;
+    options.cushion = cushion;
+    sim.set_contact_surface(result.surface, options);
+    std::vector<int> upper(static_cast<std::size_t>(mesh.num_nodes()), 0);
+    for (Index t = 0; t < mesh.num_tets(); ++t) {
+      double centre = 0;
+      for (int k = 0; k < 4; ++k) centre += mesh.rest()(mesh.tets()(t, k), 2) / 4;
+      for (int k = 0; k < 4; ++k) upper[static_cast<std::size_t>(mesh.tets()(t, k))] = centre > 0.43 ? 1 : 0;
+    }
+    // The halves' mean heights (or vertical speeds), upper less lower.
+    const auto apart = [&](const Points& values, const Points* rest) {
+      double sum[2] = {0, 0};
+      int count[2] = {0, 0};
+      for (Index n = 0; n < mesh.num_nodes(); ++n) {
+        const int side = upper[static_cast<std::size_t>(n)];
+        sum[side] += values(n, 2) - (rest ? (*rest)(n, 2) : 0.0);
+        ++count[side];
+      }
+      return sum[1] / count[1] - sum[0] / count[0];
+    };
+    sim::StepOptions step;
+    step.dt = 0.01;
+    step.gravity = Vec3::Zero();
+    for (int s = 0; s < kGrowth; ++s) {
+      sim.step(step);
+      EXPECT_EQ(crossings(result.surface, cutter.tet_nodes(), sim), 0) << "cushion " << cushion << ", step " << s;
+    }
+    *speed = apart(sim.velocities(), nullptr) * step.dt * kGrowth / sim.surface_contact().thickness;  // thicknesses per growth
+    return apart(sim.positions(), &mesh.rest()) / sim.surface_contact().thickness;
+  };
+  double speed = 0;
+  const double parted = part(1, &speed);
+  EXPECT_GT(parted, 0.3);
+  EXPECT_LT(parted, 1.2);
+  EXPECT_GT(speed, 0);
+  EXPECT_LT(speed, 1.5);
+  double still = 0;
+  EXPECT_LT(std::abs(part(0, &still)), 0.01);
+  EXPECT_LT(std::abs(still), 0.01);
 }
 
 }  // namespace
