@@ -782,7 +782,7 @@ void SurfaceContact::collect_active(const Points& at) {
       }
       return;
     }
-    // The guards: the barrier on g + wall with thickness wall + cushion, zero while g >= cushion.
+    // The guards: guard_energy, zero while g >= max(cushion, 0).
     const Index first = (chunk - pair_chunks) * kNodeChunk;
     for (Index k = first; k < std::min(guard_count, first + kNodeChunk); ++k) {
       const Guard& guard = guards_[static_cast<std::size_t>(k)];
@@ -1931,10 +1931,9 @@ void SurfaceContact::lag_guards(const Points& start) {
         covered = covers(guards_[h].normal, guard_height[h], found[j].normal, found[j].height);
       }
       if (covered) continue;
-      const std::uint64_t copies = candidates_[found[j].k].copies;
       guards_.push_back({corners(candidates_[found[j].k]), {1.0, -found[j].beta[0], -found[j].beta[1], -found[j].beta[2]}, found[j].normal,
                          found[j].zero, found[j].wall, found[j].r, found[j].r.norm(), candidates_[found[j].k].b,
-                         guard_cushion(static_cast<Index>(copies >> 32), static_cast<Index>(copies & 0xffffffffu))});
+                         guard_cushion(candidates_[found[j].k].copies)});
       guard_vertex.push_back(found[j].vertex);
       guard_height.push_back(found[j].height);
     }
@@ -2044,8 +2043,7 @@ void SurfaceContact::lag_guards(const Points& start) {
           // outside its material) it passed nothing.
           if (!(g > -delta) && !(p.free == 2 && behind_faces(edge, sign * p.r))) continue;
           // Its friction's start: r turned as the guard's (from the faces to the first edge).
-          out->push_back({corner, foot.w, normal, zero, guard_wall(g, delta), sign * p.r, p.distance, t,
-                          guard_cushion(static_cast<Index>(c.copies >> 32), static_cast<Index>(c.copies & 0xffffffffu))});
+          out->push_back({corner, foot.w, normal, zero, guard_wall(g, delta), sign * p.r, p.distance, t, guard_cushion(c.copies)});
         }
       }
     }
@@ -2067,12 +2065,10 @@ void SurfaceContact::index_guard_triangles() {
   }
 }
 
-double SurfaceContact::guard_cushion(Index copy_a, Index copy_b) const {
+double SurfaceContact::guard_cushion(std::uint64_t copies) const {
   if (!(settings_.cushion > 0)) return 0;
-  const auto cut_step = [&](Index copy) {
-    return static_cast<std::size_t>(copy) < copy_cut_step_.size() ? copy_cut_step_[static_cast<std::size_t>(copy)] : steps_;
-  };
-  const auto age = static_cast<double>(steps_ - std::max(cut_step(copy_a), cut_step(copy_b)));
+  const auto cut_step = [&](std::uint64_t copy) { return copy < copy_cut_step_.size() ? copy_cut_step_[copy] : steps_; };
+  const auto age = static_cast<double>(steps_ - std::max(cut_step(copies >> 32), cut_step(copies & 0xffffffffu)));
   // Grown at a steady rate: sides that follow it part at cushion / kCushionSteps a step, and go
   // on at that speed once it stops where nothing else holds them (its spring only pushes).
   return settings_.cushion * std::clamp(age / kCushionSteps, 0.0, 1.0);

@@ -326,9 +326,9 @@ class SurfaceContact {
   /// Over how many steps after a cut the guards' cushion grows from 0 to Settings::cushion
   /// (see Guards): so that the sides part gently, not sprung apart at once.
   static constexpr int kCushionSteps = 30;
-  /// The cushion of a guard between copies a and b: Settings::cushion times the share of
-  /// kCushionSteps passed since the later of the copies' last cuts.
-  double guard_cushion(Index copy_a, Index copy_b) const;
+  /// The cushion of a guard between the pair of copies `copies` (Candidate::copies):
+  /// Settings::cushion times the share of kCushionSteps passed since the later of their last cuts.
+  double guard_cushion(std::uint64_t copies) const;
   /// Pairs of neighbouring copies (sharing a node; see faces_across_cut) facing each other
   /// across a cut closer than this many thicknesses in the material are left to the guards:
   /// beyond dhat, so that none pushes at rest, and beyond it again, so that the two sides of a
@@ -704,8 +704,8 @@ class SurfaceContact {
     Vec3 start_r;
     double start_distance;
     Index triangle;  // whose plane it holds (a vertex guard's triangle, or a face around an edge guard's second edge)
-    // How far above its zero the barrier reaches (guard_cushion): the cushion that parts the two
-    // sides of the cut, grown since the cut.
+    // Up to how far above its zero its spring pushes (guard_cushion): the cushion that parts the
+    // two sides of the cut, grown since the cut; 0 without one.
     double cushion;
   };
   /// Whether triangle t is `face` or a triangle of its copy in its plane in the material (rest
