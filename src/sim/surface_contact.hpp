@@ -128,10 +128,11 @@
 // holds it (a ball sliced at 31 degrees kept its cap, frictionless). The spring only pushes: its
 // energy is convex and C1, and the barrier below the zero keeps its wall. Grown at once, it
 // sprang the sides apart; grown steadily, sides that follow it drift apart at about its rate
-// where nothing else holds them. Guards are made only for pairs within dhat at a step's start,
-// and joined pairs beyond it are not counted either: a cushion near dhat holds the sides at the
-// edge of that reach (81 sticks crossed in 5 pairs at one frame with a cushion of dhat, in none
-// with half of it).
+// where nothing else holds them. Joined pairs are not counted, so guards are made for them out
+// to dhat plus the cushion at a step's start (joined_reach), and the list and its measures reach
+// that far: when guards reached dhat only, a cushion near dhat held the sides at the edge of
+// that reach, and 81 sticks crossed in 5 pairs at one frame with a cushion of dhat (in none with
+// half of it).
 // Why this should not miss a real collision for long, and where it does: copies are joined only
 // while some of their surfaces are still touching where they were cut apart; a copy spans one
 // tet, so only the two sides of a cut within a tet of each other are affected, and there they are
@@ -329,6 +330,11 @@ class SurfaceContact {
   /// The cushion of a guard between the pair of copies `copies` (Candidate::copies):
   /// Settings::cushion times the share of kCushionSteps passed since the later of their last cuts.
   double guard_cushion(std::uint64_t copies) const;
+  /// How far apart joined pairs are listed, measured and guarded: dhat plus the cushion. Held by
+  /// the cushion near it, the sides of a cut would otherwise sit at the edge of the guards' reach,
+  /// with pairs just beyond it neither guarded nor counted for a step (81 sticks crossed in 5
+  /// pairs at one frame with a cushion of dhat when guards reached dhat only). dhat without one.
+  double joined_reach() const { return settings_.thickness + settings_.cushion; }
   /// Pairs of neighbouring copies (sharing a node; see faces_across_cut) facing each other
   /// across a cut closer than this many thicknesses in the material are left to the guards:
   /// beyond dhat, so that none pushes at rest, and beyond it again, so that the two sides of a

@@ -1979,5 +1979,55 @@ TEST(SurfaceContact, ACushionPartsTheSidesOfAFreshCutGently) {
   EXPECT_LT(std::abs(still), 0.01);
 }
 
+// With a cushion the guards reach joined pairs out to the thickness plus the cushion: the cushion
+// holds the two sides of a cut up to it apart, and pairs of the sides a little farther apart than
+// the thickness, still joined through their neighbours, were neither guarded nor counted (81
+// sticks crossed so with a cushion of a thickness). The block cut across, its upper half lifted
+// 1.5 thicknesses off the lower (its copies still joined), then moved 3 thicknesses down through
+// it: the move stops short of the lower half's faces, and no guarded side sinks behind them.
+TEST(SurfaceContact, WithACushionTheGuardsHoldSidesPartedBeyondTheThickness) {
+  const double dhat = 0.01, cut = 0.43;
+  Cutter cutter(make_grid({Vec3(0, 0, 0), Vec3(1, 1, 1)}, {4, 4, 4}, 5));
+  cutter.cut(plane_square(Vec3(0.5, 0.5, cut), Vec3(0, 0, 1), 3));
+  const CutResult result = cutter.result();
+  ASSERT_EQ(result.mesh.num_pieces(), 2);
+  const Points& rest = result.mesh.mesh.rest();
+  std::vector<std::uint8_t> upper(static_cast<std::size_t>(rest.rows()), 0);
+  for (std::size_t copy = 0; copy < cutter.tet_nodes().size(); ++copy) {
+    for (const Index n : cutter.tet_nodes()[copy]) upper[static_cast<std::size_t>(n)] = result.mesh.tet_piece[copy] == 0 ? 1 : 0;
+  }
+  Points lifted = rest, down = Points::Zero(rest.rows(), 3);
+  for (Index n = 0; n < rest.rows(); ++n) {
+    if (!upper[static_cast<std::size_t>(n)]) continue;
+    lifted(n, 2) += 1.5 * dhat;
+    down(n, 2) = -3 * dhat;
+  }
+  for (const double cushion : {1.0, 0.75, 0.25}) {
+    const bool within_reach = 1 + cushion > 1.5;
+    sim::detail::SurfaceContact contact;
+    sim::SurfaceContactOptions options;
+    options.thickness = dhat;
+    options.cushion = cushion;
+    const std::vector<std::uint8_t> fresh(cutter.tet_nodes().size(), 1);
+    contact.set_surface(result.surface, cutter.tet_nodes(), rest, rest, fresh, options, soft().youngs_modulus);
+    ASSERT_GT(contact.num_joins(), 0);
+    contact.lag_guards(lifted);
+    if (!within_reach) {
+      // Beyond the reach (a cushion of a quarter): no guard, and, no pair within the thickness,
+      // the join ends after the step (update_joins), and the pairs count from then on.
+      EXPECT_EQ(contact.num_guards(), 0) << "cushion " << cushion;
+      continue;
+    }
+    EXPECT_GT(contact.num_guards(), 100) << "cushion " << cushion;
+    {
+      const double t = contact.max_step(lifted, down.data());
+      // The lower half's faces are 1.5 thicknesses below, plus the guards' wall.
+      EXPECT_GT(t, 0.4) << "cushion " << cushion;
+      EXPECT_LT(t, 0.55) << "cushion " << cushion;
+      EXPECT_LE(contact.guard_excess(lifted + t * down), 0) << "cushion " << cushion;
+    }
+  }
+}
+
 }  // namespace
 }  // namespace tetcut
