@@ -249,11 +249,12 @@ struct SurfaceContactOptions {
   /// cut opens by up to a thickness over the 30 steps after it is made, and a side resting on
   /// its cut then slides along it as on any surface; without, it slides only about a tet before
   /// the barrier of the other side's rims, a gap of about 0 away, holds it (docs/contact.md).
-  /// Costs more where cut sides press together: each guard is active up to the cushion. At 1,
-  /// 81 sticks piling crossed in 5 pairs at one frame (sides held about a thickness apart are at
-  /// the edge of the guards' reach); at 0.5 none did, though a block's half then slides at 0.83
-  /// of g sin on a frictionless incline (a ball's cap slides off its cut either way), but Figure
-  /// 8's colliding slinky crossed in up to 2 pairs in 5 of 76 frames: not safe everywhere yet.
+  /// Costs more where cut sides press together: each guard is active up to the cushion, and
+  /// guards reach joined pairs out to the thickness plus the cushion. At 0.5 a block's half
+  /// slides at 0.83 of g sin on a frictionless incline (a ball's cap slides off its cut with
+  /// either value). Not safe everywhere yet: 81 sticks piling cross in no pair with 1, but
+  /// Figure 8's colliding slinky, with 0.5, in up to 6 pairs in 16 of 76 frames (the two sides
+  /// of a cut pressed just past the guards' allowance).
   double cushion = 0;
 };
 
