@@ -14,7 +14,12 @@
 // topology message being ready (the server sends it before stepping; a pose also waits up to
 // one tick, 33 ms, for the tick to begin).
 //
-// Usage: tetcut_bench_live [SCENE]   (default: examples/live-femur.json)
+// Usage: tetcut_bench_live [SCENE] [per-tick]   (default: examples/live-femur.json); with per-tick,
+// also a line for each tick: its wall time, Newton and rescue iterations, the residual, and, where
+// the scene has self_collision, the moves CCD shortened, contact's seconds in the step, its pairs,
+// candidates and guards after it, and the list's rebuilds and contact's parts within the tick
+// (where a tick with contact goes: a side pressed onto its cut and dragged costs a rebuild of the
+// list per leg of each Newton move; docs/contact.md).
 
 #include <tetcut/render.hpp>
 #include <tetcut/scene.hpp>
@@ -50,6 +55,12 @@ struct Phase {
 
 int main(int argc, char** argv) {
   const std::string path = argc > 1 ? argv[1] : TETCUT_EXAMPLES "/live-femur.json";
+  const std::string detail = argc > 2 ? argv[2] : "";
+  if (!detail.empty() && detail != "per-tick") {
+    std::fprintf(stderr, "tetcut_bench_live: the second argument is per-tick, not '%s'\n", detail.c_str());
+    return 2;
+  }
+  const bool per_tick = !detail.empty();
   const auto setup = Clock::now();
   const tetcut::Scene scene = tetcut::load_scene(path);
   tetcut::Session session(scene);
@@ -72,6 +83,12 @@ int main(int argc, char** argv) {
 
   std::vector<Phase> phases;
   std::size_t frame_bytes = 0;
+  using ContactState = tetcut::sim::Simulator::SurfaceContactState;
+  ContactState contact_before = session.simulator().surface_contact();
+  if (per_tick) {
+    std::printf("  %-8s %4s %7s %6s %6s %9s %7s %10s %6s %10s %6s %8s %8s %7s %7s %7s %7s\n", "phase", "tick", "ms", "newton", "rescue",
+                "residual", "limited", "contact ms", "pairs", "candidates", "guards", "rebuilds", "rebuild", "ccd", "active", "guards", "joins");
+  }
   // One tick: `events` (before the step), then the server's messages and the step.
   const auto tick = [&](Phase& phase, const auto& events) {
     const auto start = Clock::now();
@@ -96,6 +113,18 @@ int main(int argc, char** argv) {
                                              session.simulator().positions(), pieces)
                       .size();
     phase.tick_ms.push_back(ms_since(start));
+    if (per_tick) {
+      const ContactState c = session.simulator().surface_contact();
+      const auto ms = [](double after, double before) { return 1e3 * (after - before); };
+      std::printf("  %-8s %4zu %7.1f %6d %6d %9.3g %7d %10.1f %6lld %10lld %6lld %8lld %8.1f %7.1f %7.1f %7.1f %7.1f\n", phase.name.c_str(),
+                  phase.tick_ms.size(), phase.tick_ms.back(), step.report.newton_iterations, step.report.rescue_iterations,
+                  step.report.residual, step.report.contact_limited_steps, 1e3 * step.report.contact_seconds,
+                  static_cast<long long>(step.report.contact_pairs), static_cast<long long>(c.candidates), static_cast<long long>(c.guards),
+                  static_cast<long long>(c.rebuilds - contact_before.rebuilds), ms(c.rebuild_seconds, contact_before.rebuild_seconds),
+                  ms(c.ccd_seconds, contact_before.ccd_seconds), ms(c.active_seconds, contact_before.active_seconds),
+                  ms(c.guard_seconds, contact_before.guard_seconds), ms(c.join_seconds, contact_before.join_seconds));
+      contact_before = c;
+    }
     phase.max_residual = std::max(phase.max_residual, step.report.residual);
     phase.rescues += step.report.rescue_iterations;
   };
