@@ -316,6 +316,9 @@ class SurfaceContact {
   /// push a side back out, a hair beyond that wall). At most 0 while every guard holds.
   /// O(V + guards).
   double guard_excess(const Points& at) const;
+  /// For tests: the deepest wall among the guards (how far behind its zero a guard's barrier
+  /// stops), 0 without guards.
+  double deepest_guard_wall() const;
   /// Whether the last max_step ended its move where the guards' planes, held since they were
   /// made, allowed (guards_share): the caller may make them again where it stands (lag_guards)
   /// before its next Newton iteration, so that a step in which faces turn and slide far against
@@ -734,6 +737,9 @@ class SurfaceContact {
   /// How deep behind its triangle's own plane a guard lets its side go: the allowance, or, for a
   /// guard made where its side lay behind the wall already, a hair deeper than its wall.
   double guard_depth(const Guard& guard) const;
+  /// How much deeper than its side a guard found past its wall gets its wall, in allowances
+  /// (kRecoverShare, or kCushionRecoverShare with a cushion).
+  double recover_share() const;
   static constexpr double kGuardSlack = 1e-6;
   std::vector<Guard> guards_;
   // Steps ended (update_joins), and per copy the count when a cut last changed it: the cushion's
@@ -741,6 +747,7 @@ class SurfaceContact {
   std::int64_t steps_ = 0;
   std::vector<std::int64_t> copy_cut_step_;
   std::vector<Index> first_vertex_guard_;  // lag_guards' scratch: per vertex its first guard, or -1
+
   bool sutures_changed_ = false;
   Points rest_y_;
   // Per triangle its unit normal in the material; per vertex its triangles (CSR).

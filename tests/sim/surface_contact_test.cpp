@@ -2027,5 +2027,55 @@ TEST(SurfaceContact, WithACushionTheGuardsHoldSidesPartedBeyondTheThickness) {
   }
 }
 
+// A side pressed past its guards' wall is guarded from where it is, its wall a little deeper.
+// Held by a steady load near that wall and guarded again (the next step, or the next move the
+// guards' planes held back), it was guarded that little deeper again: the slinky's coils, held
+// 0.0026 of the allowance off their walls, crept 5.85 allowances into each other with a cushion.
+// With a cushion the wall goes a thousandth of the allowance below the side, so a side held that
+// far off its wall is guarded less deep than before and pushed out; without, a hundredth, as the
+// piles were measured.
+TEST(SurfaceContact, WithACushionAGuardHeldNearItsWallIsNotMadeDeeperAgain) {
+  const double dhat = 0.01, cut = 0.43;
+  Cutter cutter(make_grid({Vec3(0, 0, 0), Vec3(1, 1, 1)}, {4, 4, 4}, 5));
+  cutter.cut(plane_square(Vec3(0.5, 0.5, cut), Vec3(0, 0, 1), 3));
+  const CutResult result = cutter.result();
+  ASSERT_EQ(result.mesh.num_pieces(), 2);
+  const Points& rest = result.mesh.mesh.rest();
+  std::vector<std::uint8_t> upper(static_cast<std::size_t>(rest.rows()), 0);
+  for (std::size_t copy = 0; copy < cutter.tet_nodes().size(); ++copy) {
+    for (const Index n : cutter.tet_nodes()[copy]) upper[static_cast<std::size_t>(n)] = result.mesh.tet_piece[copy] == 0 ? 1 : 0;
+  }
+  // The upper half pressed 0.9 of the allowance into the lower (past the wall, 0.75 of it), then
+  // on to 0.0026 of the allowance off the walls that made.
+  const double delta = 0.1 * dhat;
+  const auto pressed = [&](double depth) {
+    Points at = rest;
+    for (Index n = 0; n < rest.rows(); ++n) {
+      if (upper[static_cast<std::size_t>(n)]) at(n, 2) -= depth;
+    }
+    return at;
+  };
+  for (const double cushion : {1.0, 0.0}) {
+    sim::detail::SurfaceContact contact;
+    sim::SurfaceContactOptions options;
+    options.thickness = dhat;
+    options.cushion = cushion;
+    const std::vector<std::uint8_t> fresh(cutter.tet_nodes().size(), 1);
+    contact.set_surface(result.surface, cutter.tet_nodes(), rest, rest, fresh, options, soft().youngs_modulus);
+    ASSERT_GT(contact.num_joins(), 0);
+    contact.lag_guards(pressed(0.9 * delta));
+    ASSERT_GT(contact.num_guards(), 100) << "cushion " << cushion;
+    const double first = contact.deepest_guard_wall();
+    EXPECT_NEAR(first, (cushion > 0 ? 0.901 : 0.91) * delta, 1e-4 * delta) << "cushion " << cushion;
+    contact.lag_guards(pressed(first - 0.0026 * delta));
+    const double second = contact.deepest_guard_wall();
+    if (cushion > 0) {
+      EXPECT_LT(second, first - 0.001 * delta);
+    } else {
+      EXPECT_GT(second, first + 0.005 * delta);  // as before: a hundredth below where the side is
+    }
+  }
+}
+
 }  // namespace
 }  // namespace tetcut
