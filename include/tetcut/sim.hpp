@@ -253,9 +253,10 @@ struct SurfaceContactOptions {
   /// guards reach joined pairs out to the thickness plus the cushion. At 0.5 a block's half
   /// slides at 0.83 of g sin on a frictionless incline (a ball's cap slides off its cut with
   /// either value). Not safe everywhere yet: 81 sticks piling cross in no pair with 1, Figure
-  /// 4's 289 sticks, 144 sticks and the femur incision in none with 0.5, but Figure 8's
-  /// colliding slinky, with 0.5, in up to 6 pairs in 16 of 76 frames (the two sides of a cut
-  /// pressed just past the guards' allowance).
+  /// 4's 289 sticks, 144 sticks and the femur incision in none with 0.5; Figure 8's colliding
+  /// slinky, with 0.5, crossed in up to 6 pairs in 16 of 76 frames while guards pressed past
+  /// their wall crept deeper at each lag, and since they no longer do with a cushion in none over
+  /// its first 1.84 s, not yet run to its end.
   double cushion = 0;
 };
 

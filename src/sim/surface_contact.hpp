@@ -747,7 +747,6 @@ class SurfaceContact {
   std::int64_t steps_ = 0;
   std::vector<std::int64_t> copy_cut_step_;
   std::vector<Index> first_vertex_guard_;  // lag_guards' scratch: per vertex its first guard, or -1
-
   bool sutures_changed_ = false;
   Points rest_y_;
   // Per triangle its unit normal in the material; per vertex its triangles (CSR).

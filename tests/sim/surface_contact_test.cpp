@@ -47,6 +47,24 @@ sim::Material soft() {
   return m;
 }
 
+// A 1 m block (4 x 4 x 4 cells, 5 tets a cube) cut across at z = `cut`, and per node whether it
+// is in the upper half (the halves share no node; the upper is the first piece).
+struct HalvedBlock {
+  Cutter cutter;
+  CutResult result;
+  std::vector<std::uint8_t> upper;
+};
+HalvedBlock halved_block(double cut) {
+  HalvedBlock block{Cutter(make_grid({Vec3(0, 0, 0), Vec3(1, 1, 1)}, {4, 4, 4}, 5)), {}, {}};
+  block.cutter.cut(plane_square(Vec3(0.5, 0.5, cut), Vec3(0, 0, 1), 3));
+  block.result = block.cutter.result();
+  block.upper.assign(static_cast<std::size_t>(block.result.mesh.mesh.rest().rows()), 0);
+  for (std::size_t copy = 0; copy < block.cutter.tet_nodes().size(); ++copy) {
+    for (const Index n : block.cutter.tet_nodes()[copy]) block.upper[static_cast<std::size_t>(n)] = block.result.mesh.tet_piece[copy] == 0 ? 1 : 0;
+  }
+  return block;
+}
+
 Index crossings(const MaterialSurface& surface, const std::vector<std::array<Index, 4>>& copies, const sim::Simulator& sim) {
   const Points at = surface.positions(copies, sim.positions());
   const double diagonal = (at.colwise().maxCoeff() - at.colwise().minCoeff()).norm();
@@ -1108,9 +1126,9 @@ TEST(SurfaceContact, APieceFallingAwayFallsAsItDoesWithoutContact) {
 // (0.31) and still sink nothing.
 TEST(SurfaceContact, NoGuardedSideSinksBehindATurningFaceBeyondTheAllowance) {
   const double dhat = 0.01, turn = 0.2, slide = 0.2, cut = 0.43;
-  Cutter cutter(make_grid({Vec3(0, 0, 0), Vec3(1, 1, 1)}, {4, 4, 4}, 5));
-  cutter.cut(plane_square(Vec3(0.5, 0.5, cut), Vec3(0, 0, 1), 3));
-  const CutResult result = cutter.result();
+  const HalvedBlock block = halved_block(cut);
+  const Cutter& cutter = block.cutter;
+  const CutResult& result = block.result;
   ASSERT_EQ(result.mesh.num_pieces(), 2);
   const Points& rest = result.mesh.mesh.rest();
   sim::detail::SurfaceContact contact;
@@ -1120,11 +1138,7 @@ TEST(SurfaceContact, NoGuardedSideSinksBehindATurningFaceBeyondTheAllowance) {
   contact.set_surface(result.surface, cutter.tet_nodes(), rest, rest, fresh, options, soft().youngs_modulus);
   contact.lag_guards(rest);
   ASSERT_GT(contact.num_guards(), 100);
-  // Which half a node is in (the halves share no node): the upper is the larger piece, the first.
-  std::vector<std::uint8_t> upper(static_cast<std::size_t>(rest.rows()), 0);
-  for (std::size_t copy = 0; copy < cutter.tet_nodes().size(); ++copy) {
-    for (const Index n : cutter.tet_nodes()[copy]) upper[static_cast<std::size_t>(n)] = result.mesh.tet_piece[copy] == 0 ? 1 : 0;
-  }
+  const std::vector<std::uint8_t>& upper = block.upper;
   Points direction(rest.rows(), 3);
   const Vec3 axis(1, 0, 0), on_axis(0.5, 0.5, cut);
   for (Index n = 0; n < rest.rows(); ++n) {
@@ -1987,15 +2001,12 @@ TEST(SurfaceContact, ACushionPartsTheSidesOfAFreshCutGently) {
 // it: the move stops short of the lower half's faces, and no guarded side sinks behind them.
 TEST(SurfaceContact, WithACushionTheGuardsHoldSidesPartedBeyondTheThickness) {
   const double dhat = 0.01, cut = 0.43;
-  Cutter cutter(make_grid({Vec3(0, 0, 0), Vec3(1, 1, 1)}, {4, 4, 4}, 5));
-  cutter.cut(plane_square(Vec3(0.5, 0.5, cut), Vec3(0, 0, 1), 3));
-  const CutResult result = cutter.result();
+  const HalvedBlock block = halved_block(cut);
+  const Cutter& cutter = block.cutter;
+  const CutResult& result = block.result;
   ASSERT_EQ(result.mesh.num_pieces(), 2);
   const Points& rest = result.mesh.mesh.rest();
-  std::vector<std::uint8_t> upper(static_cast<std::size_t>(rest.rows()), 0);
-  for (std::size_t copy = 0; copy < cutter.tet_nodes().size(); ++copy) {
-    for (const Index n : cutter.tet_nodes()[copy]) upper[static_cast<std::size_t>(n)] = result.mesh.tet_piece[copy] == 0 ? 1 : 0;
-  }
+  const std::vector<std::uint8_t>& upper = block.upper;
   Points lifted = rest, down = Points::Zero(rest.rows(), 3);
   for (Index n = 0; n < rest.rows(); ++n) {
     if (!upper[static_cast<std::size_t>(n)]) continue;
@@ -2036,15 +2047,12 @@ TEST(SurfaceContact, WithACushionTheGuardsHoldSidesPartedBeyondTheThickness) {
 // piles were measured.
 TEST(SurfaceContact, WithACushionAGuardHeldNearItsWallIsNotMadeDeeperAgain) {
   const double dhat = 0.01, cut = 0.43;
-  Cutter cutter(make_grid({Vec3(0, 0, 0), Vec3(1, 1, 1)}, {4, 4, 4}, 5));
-  cutter.cut(plane_square(Vec3(0.5, 0.5, cut), Vec3(0, 0, 1), 3));
-  const CutResult result = cutter.result();
+  const HalvedBlock block = halved_block(cut);
+  const Cutter& cutter = block.cutter;
+  const CutResult& result = block.result;
   ASSERT_EQ(result.mesh.num_pieces(), 2);
   const Points& rest = result.mesh.mesh.rest();
-  std::vector<std::uint8_t> upper(static_cast<std::size_t>(rest.rows()), 0);
-  for (std::size_t copy = 0; copy < cutter.tet_nodes().size(); ++copy) {
-    for (const Index n : cutter.tet_nodes()[copy]) upper[static_cast<std::size_t>(n)] = result.mesh.tet_piece[copy] == 0 ? 1 : 0;
-  }
+  const std::vector<std::uint8_t>& upper = block.upper;
   // The upper half pressed 0.9 of the allowance into the lower (past the wall, 0.75 of it), then
   // on to 0.0026 of the allowance off the walls that made.
   const double delta = 0.1 * dhat;
