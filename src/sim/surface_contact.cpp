@@ -90,20 +90,17 @@ constexpr double kGuardWall = 0.75;
 // A guard whose pair is found at a step's start behind the wall (its triangle turned since the
 // last start) is given a wall this share of the allowance deeper than where it is: little, so
 // that the barrier pushes it back out rather than letting the load that pressed it there press it
-// deeper (at the bottom of Figure 4's pile corners sat 0.03 of the allowance from the wall).
-constexpr double kRecoverShare = 0.01;
-// The same with a cushion. Made again at every lag (each step's start, and each move the guards'
-// planes held back) a hundredth below where its side is, a guard whose side a steady load held
-// within that hundredth of its wall crept deeper at each: on the colliding slinky with a cushion
-// of 0.5, whose springs load the squeezed coils' pressed sides, to 5.85 allowances, its sides
-// held 0.0026 of the allowance off their walls, and it crossed (docs/contact.md, twenty-first
-// session). A thousandth puts the wall of a side held that far off it shallower, and the barrier
-// pushes it out. Without a cushion the piles and the slinky were measured with a hundredth (it
-// crept to 1.74 allowances there, with no crossing), and it stays until they are run with this.
-constexpr double kCushionRecoverShare = 0.001;
+// deeper (at the bottom of Figure 4's pile corners sat 0.03 of the allowance from the wall). Not
+// more than a thousandth: guards are made again at every lag (each step's start, and each move
+// the guards' planes held back), and a side that a steady load holds near its wall, a hundredth
+// below where it was, crept deeper at each, since the wall moved by more than the side stood
+// off it (0.0026 of the allowance on the colliding slinky): to 1.74 allowances there, and with
+// a cushion of 0.5, whose springs load the squeezed coils' pressed sides further, to 5.85, and it
+// crossed (docs/contact.md, twenty-first and twenty-second sessions).
+constexpr double kRecoverShare = 0.001;
 // How far behind its zero a guard's wall stands, for a pair at g (from the zero) at the step's
-// start: kGuardWall of the allowance delta, or `recover` of it deeper than the pair.
-double guard_wall(double g, double delta, double recover) { return std::max(kGuardWall * delta, -g + recover * delta); }
+// start: kGuardWall of the allowance delta, or kRecoverShare of it deeper than the pair.
+double guard_wall(double g, double delta) { return std::max(kGuardWall * delta, -g + kRecoverShare * delta); }
 
 // Adds a scope's wall time to *total, less what *rebuild (the rebuilds' total) grew by within it:
 // the rebuilds a part sets off are counted apart.
@@ -1681,11 +1678,10 @@ double SurfaceContact::guards_share(const Points& from, const Eigen::Map<const P
   });
 }
 
-double SurfaceContact::recover_share() const { return settings_.cushion > 0 ? kCushionRecoverShare : kRecoverShare; }
 
 double SurfaceContact::guard_depth(const Guard& guard) const {
   const double delta = guard_allowance();
-  return std::max(delta, guard.wall + recover_share() * delta);
+  return std::max(delta, guard.wall + kRecoverShare * delta);
 }
 
 double SurfaceContact::guard_excess(const Points& at) const {
@@ -1926,7 +1922,7 @@ void SurfaceContact::lag_guards(const Points& start) {
       // it is, it is pushed back out.
       if (!(g > -delta) && !(inside >= 0)) continue;
       out->push_back({corner[0], inside, static_cast<std::size_t>(k), {beta_a, beta_b, beta_c}, normal,
-                      p - (beta_a * a + beta_b * b + beta_c * q), g + zero, zero, guard_wall(g, delta, recover_share())});
+                      p - (beta_a * a + beta_b * b + beta_c * q), g + zero, zero, guard_wall(g, delta)});
     }
   });
   // One guard per vertex and plane: a vertex facing a fan of coplanar triangles (the other side
@@ -2069,7 +2065,7 @@ void SurfaceContact::lag_guards(const Points& start) {
           // outside its material) it passed nothing.
           if (!(g > -delta) && !(p.free == 2 && behind_faces(edge, sign * p.r))) continue;
           // Its friction's start: r turned as the guard's (from the faces to the first edge).
-          out->push_back({corner, foot.w, normal, zero, guard_wall(g, delta, recover_share()), sign * p.r, p.distance, t, spring_cushion(k)});
+          out->push_back({corner, foot.w, normal, zero, guard_wall(g, delta), sign * p.r, p.distance, t, spring_cushion(k)});
         }
       }
     }
