@@ -90,17 +90,25 @@ constexpr double kGuardWall = 0.75;
 // A guard whose pair is found at a step's start behind the wall (its triangle turned since the
 // last start) is given a wall this share of the allowance deeper than where it is: little, so
 // that the barrier pushes it back out rather than letting the load that pressed it there press it
-// deeper (at the bottom of Figure 4's pile corners sat 0.03 of the allowance from the wall). Not
-// more than a thousandth: guards are made again at every lag (each step's start, and each move
-// the guards' planes held back), and a side that a steady load holds near its wall, a hundredth
-// below where it was, crept deeper at each, since the wall moved by more than the side stood
-// off it (0.0026 of the allowance on the colliding slinky): to 1.74 allowances there, and with
-// a cushion of 0.5, whose springs load the squeezed coils' pressed sides further, to 5.85, and it
-// crossed (docs/contact.md, twenty-first and twenty-second sessions).
-constexpr double kRecoverShare = 0.001;
+// deeper (at the bottom of Figure 4's pile corners sat 0.03 of the allowance from the wall).
+constexpr double kRecoverShare = 0.01;
+// The same for a pair found past the whole allowance. Guards are made again at every lag (each
+// step's start, and each move the guards' planes held back), and a side that a steady load held
+// within a hundredth of its wall was guarded a hundredth deeper again at each: on the colliding
+// slinky, whose sides stood 0.0026 of the allowance off their walls, guards crept to 1.74
+// allowances, and with a cushion of 0.5, whose springs load the squeezed coils' pressed sides
+// further, to 5.85, and it crossed. A thousandth puts the wall of a side held that far off it
+// shallower than before, and the barrier pushes it out. Not within the allowance: there a
+// thousandth for every guard left 81 sticks' Newton solves unconverged at 74 of 150 steps
+// against 28, the barriers of the pile's corners pressed near their walls that much stiffer
+// (docs/contact.md, twenty-second session).
+constexpr double kPastRecoverShare = 0.001;
 // How far behind its zero a guard's wall stands, for a pair at g (from the zero) at the step's
-// start: kGuardWall of the allowance delta, or kRecoverShare of it deeper than the pair.
-double guard_wall(double g, double delta) { return std::max(kGuardWall * delta, -g + kRecoverShare * delta); }
+// start: kGuardWall of the allowance delta, or kRecoverShare of it deeper than the pair
+// (kPastRecoverShare past the allowance).
+double guard_wall(double g, double delta) {
+  return std::max(kGuardWall * delta, -g + (-g < delta ? kRecoverShare : kPastRecoverShare) * delta);
+}
 
 // Adds a scope's wall time to *total, less what *rebuild (the rebuilds' total) grew by within it:
 // the rebuilds a part sets off are counted apart.

@@ -90,8 +90,8 @@
 // sticks, on one path). Faces still side by side, or only turned a little, get none, so that the
 // sides may turn about the line where they touch either way.
 // A vertex found behind the whole allowance at a step's
-// start, over its triangle, is guarded from where it is, its wall a thousandth of delta deeper, so
-// that the barrier pushes it back out (left unguarded, such a corner of Figure 4 sank 18
+// start, over its triangle, is guarded from where it is, its wall a thousandth of delta deeper
+// (one behind the wall within the allowance, a hundredth), so that the barrier pushes it back out (left unguarded, such a corner of Figure 4 sank 18
 // allowances into the other stick in four steps); so is an edge found crossed into the other
 // side's material (below). A guard's g is measured from where its
 // pair lay in the material when that was behind the plane, less a millionth of the allowance, so
