@@ -92,23 +92,24 @@ constexpr double kGuardWall = 0.75;
 // that the barrier pushes it back out rather than letting the load that pressed it there press it
 // deeper (at the bottom of Figure 4's pile corners sat 0.03 of the allowance from the wall).
 constexpr double kRecoverShare = 0.01;
-// The same for a pair found past the whole allowance. Guards are made again at every lag (each
-// step's start, and each move the guards' planes held back), and a side that a steady load held
-// within a hundredth of its wall was guarded a hundredth deeper again at each: on the colliding
-// slinky, whose sides stood 0.0026 of the allowance off their walls, guards crept to 1.74
-// allowances, and with a cushion of 0.5, whose springs load the squeezed coils' pressed sides
-// further, to 5.85, and it crossed. A thousandth puts the wall of a side held that far off it
-// shallower than before, and the barrier pushes it out. Not within the allowance: there a
-// thousandth for every guard left 81 sticks' Newton solves unconverged at 74 of 150 steps
-// against 28, the barriers of the pile's corners pressed near their walls that much stiffer
-// (docs/contact.md, twenty-second session).
-constexpr double kPastRecoverShare = 0.001;
+// The same with a cushion. Made again at every lag (each step's start, and each move the guards'
+// planes held back) a hundredth below where its side is, a guard whose side a steady load held
+// within that hundredth of its wall crept deeper at each: on the colliding slinky with a cushion
+// of 0.5, whose springs load the squeezed coils' pressed sides, to 5.85 allowances, its sides
+// held 0.0026 of the allowance off their walls, and it crossed (docs/contact.md, twenty-first
+// session). A thousandth puts the wall of a side held that far off it shallower, and the barrier
+// pushes it out. Without a cushion the hundredth stays: run with a thousandth (twenty-second
+// session), 81 sticks' Newton solves stopped unconverged at 74 of 150 steps against 28, the
+// barriers of the pile's corners pressed just past their walls that much steeper; with a
+// thousandth past the whole allowance only, the plain slinky's deepest guard went to 1.31
+// allowances instead of 1.74 (a side held closer to its wall than the share creeps on at any
+// share), and Figure 4 took another path, on which a stick's corner went round a neighbour's
+// rim into it where no guard held it, 9.7 allowances deep within a step, and it crossed in 10
+// pairs at one frame (a gap of the guards, not of this share: docs/contact.md).
+constexpr double kCushionRecoverShare = 0.001;
 // How far behind its zero a guard's wall stands, for a pair at g (from the zero) at the step's
-// start: kGuardWall of the allowance delta, or kRecoverShare of it deeper than the pair
-// (kPastRecoverShare past the allowance).
-double guard_wall(double g, double delta) {
-  return std::max(kGuardWall * delta, -g + (-g < delta ? kRecoverShare : kPastRecoverShare) * delta);
-}
+// start: kGuardWall of the allowance delta, or `recover` of it deeper than the pair.
+double guard_wall(double g, double delta, double recover) { return std::max(kGuardWall * delta, -g + recover * delta); }
 
 // Adds a scope's wall time to *total, less what *rebuild (the rebuilds' total) grew by within it:
 // the rebuilds a part sets off are counted apart.
@@ -1686,10 +1687,11 @@ double SurfaceContact::guards_share(const Points& from, const Eigen::Map<const P
   });
 }
 
+double SurfaceContact::recover_share() const { return settings_.cushion > 0 ? kCushionRecoverShare : kRecoverShare; }
 
 double SurfaceContact::guard_depth(const Guard& guard) const {
   const double delta = guard_allowance();
-  return std::max(delta, guard.wall + kRecoverShare * delta);
+  return std::max(delta, guard.wall + recover_share() * delta);
 }
 
 double SurfaceContact::guard_excess(const Points& at) const {
@@ -1930,7 +1932,7 @@ void SurfaceContact::lag_guards(const Points& start) {
       // it is, it is pushed back out.
       if (!(g > -delta) && !(inside >= 0)) continue;
       out->push_back({corner[0], inside, static_cast<std::size_t>(k), {beta_a, beta_b, beta_c}, normal,
-                      p - (beta_a * a + beta_b * b + beta_c * q), g + zero, zero, guard_wall(g, delta)});
+                      p - (beta_a * a + beta_b * b + beta_c * q), g + zero, zero, guard_wall(g, delta, recover_share())});
     }
   });
   // One guard per vertex and plane: a vertex facing a fan of coplanar triangles (the other side
@@ -2073,7 +2075,7 @@ void SurfaceContact::lag_guards(const Points& start) {
           // outside its material) it passed nothing.
           if (!(g > -delta) && !(p.free == 2 && behind_faces(edge, sign * p.r))) continue;
           // Its friction's start: r turned as the guard's (from the faces to the first edge).
-          out->push_back({corner, foot.w, normal, zero, guard_wall(g, delta), sign * p.r, p.distance, t, spring_cushion(k)});
+          out->push_back({corner, foot.w, normal, zero, guard_wall(g, delta, recover_share()), sign * p.r, p.distance, t, spring_cushion(k)});
         }
       }
     }

@@ -90,8 +90,8 @@
 // sticks, on one path). Faces still side by side, or only turned a little, get none, so that the
 // sides may turn about the line where they touch either way.
 // A vertex found behind the whole allowance at a step's
-// start, over its triangle, is guarded from where it is, its wall a thousandth of delta deeper
-// (one behind the wall within the allowance, a hundredth), so that the barrier pushes it back out (left unguarded, such a corner of Figure 4 sank 18
+// start, over its triangle, is guarded from where it is, its wall a hundredth of delta deeper, so
+// that the barrier pushes it back out (left unguarded, such a corner of Figure 4 sank 18
 // allowances into the other stick in four steps); so is an edge found crossed into the other
 // side's material (below). A guard's g is measured from where its
 // pair lay in the material when that was behind the plane, less a millionth of the allowance, so
@@ -737,6 +737,9 @@ class SurfaceContact {
   /// How deep behind its triangle's own plane a guard lets its side go: the allowance, or, for a
   /// guard made where its side lay behind the wall already, a hair deeper than its wall.
   double guard_depth(const Guard& guard) const;
+  /// How much deeper than its side a guard found past its wall gets its wall, in allowances
+  /// (kRecoverShare, or kCushionRecoverShare with a cushion).
+  double recover_share() const;
   static constexpr double kGuardSlack = 1e-6;
   std::vector<Guard> guards_;
   // Steps ended (update_joins), and per copy the count when a cut last changed it: the cushion's
