@@ -255,8 +255,8 @@ struct SurfaceContactOptions {
   /// either value). Not safe everywhere yet: 81 sticks piling cross in no pair with 1, Figure
   /// 4's 289 sticks, 144 sticks and the femur incision in none with 0.5; Figure 8's colliding
   /// slinky, with 0.5, crossed in up to 6 pairs in 16 of 76 frames while guards pressed past
-  /// their wall crept deeper at each lag, and since they no longer do with a cushion in none over
-  /// its first 1.84 s, not yet run to its end.
+  /// their wall crept deeper at each lag, and since they no longer do with a cushion in none
+  /// over its whole 3 s.
   double cushion = 0;
 };
 
