@@ -1861,7 +1861,7 @@ void SurfaceContact::lag_guards(const Points& start) {
   if (!enabled() || (joins_.empty() && group_facing_.empty())) return;
   cover(start, nullptr, 0);
   measure(kJoined);
-  const double dhat = settings_.thickness, delta = guard_allowance(), reach = joined_reach();
+  const double dhat = settings_.thickness, delta = guard_allowance(), reach = joined_reach(), recover = recover_share();
   // The cushion's spring pushes only pairs within dhat: those beyond it, guarded out to the reach
   // so that they cannot pass through each other (joined_reach), need no pushing apart. (Pushed
   // too, the cut block's upper half slid 15% less far than Coulomb says with friction: more
@@ -1932,7 +1932,7 @@ void SurfaceContact::lag_guards(const Points& start) {
       // it is, it is pushed back out.
       if (!(g > -delta) && !(inside >= 0)) continue;
       out->push_back({corner[0], inside, static_cast<std::size_t>(k), {beta_a, beta_b, beta_c}, normal,
-                      p - (beta_a * a + beta_b * b + beta_c * q), g + zero, zero, guard_wall(g, delta, recover_share())});
+                      p - (beta_a * a + beta_b * b + beta_c * q), g + zero, zero, guard_wall(g, delta, recover)});
     }
   });
   // One guard per vertex and plane: a vertex facing a fan of coplanar triangles (the other side
@@ -2075,7 +2075,7 @@ void SurfaceContact::lag_guards(const Points& start) {
           // outside its material) it passed nothing.
           if (!(g > -delta) && !(p.free == 2 && behind_faces(edge, sign * p.r))) continue;
           // Its friction's start: r turned as the guard's (from the faces to the first edge).
-          out->push_back({corner, foot.w, normal, zero, guard_wall(g, delta, recover_share()), sign * p.r, p.distance, t, spring_cushion(k)});
+          out->push_back({corner, foot.w, normal, zero, guard_wall(g, delta, recover), sign * p.r, p.distance, t, spring_cushion(k)});
         }
       }
     }

@@ -65,6 +65,13 @@ HalvedBlock halved_block(double cut) {
   return block;
 }
 
+// Sets the halved block's surface on `contact` at rest, its cut new: its two sides joined.
+void set_fresh_surface(sim::detail::SurfaceContact* contact, const HalvedBlock& block, const sim::SurfaceContactOptions& options) {
+  const Points& rest = block.result.mesh.mesh.rest();
+  const std::vector<std::uint8_t> fresh(block.cutter.tet_nodes().size(), 1);
+  contact->set_surface(block.result.surface, block.cutter.tet_nodes(), rest, rest, fresh, options, soft().youngs_modulus);
+}
+
 Index crossings(const MaterialSurface& surface, const std::vector<std::array<Index, 4>>& copies, const sim::Simulator& sim) {
   const Points at = surface.positions(copies, sim.positions());
   const double diagonal = (at.colwise().maxCoeff() - at.colwise().minCoeff()).norm();
@@ -1127,15 +1134,12 @@ TEST(SurfaceContact, APieceFallingAwayFallsAsItDoesWithoutContact) {
 TEST(SurfaceContact, NoGuardedSideSinksBehindATurningFaceBeyondTheAllowance) {
   const double dhat = 0.01, turn = 0.2, slide = 0.2, cut = 0.43;
   const HalvedBlock block = halved_block(cut);
-  const Cutter& cutter = block.cutter;
-  const CutResult& result = block.result;
-  ASSERT_EQ(result.mesh.num_pieces(), 2);
-  const Points& rest = result.mesh.mesh.rest();
+  ASSERT_EQ(block.result.mesh.num_pieces(), 2);
+  const Points& rest = block.result.mesh.mesh.rest();
   sim::detail::SurfaceContact contact;
   sim::SurfaceContactOptions options;
   options.thickness = dhat;
-  const std::vector<std::uint8_t> fresh(cutter.tet_nodes().size(), 1);  // the cut is new: its sides are joined
-  contact.set_surface(result.surface, cutter.tet_nodes(), rest, rest, fresh, options, soft().youngs_modulus);
+  set_fresh_surface(&contact, block, options);
   contact.lag_guards(rest);
   ASSERT_GT(contact.num_guards(), 100);
   const std::vector<std::uint8_t>& upper = block.upper;
@@ -1183,18 +1187,15 @@ TEST(SurfaceContact, NoGuardedSideSinksBehindATurningFaceBeyondTheAllowance) {
 // fails without it.)
 TEST(SurfaceContact, NoPointOfACutsFlatPolygonsSinksBeyondTheAllowanceThoughTheirInnerEdgesHaveNoGuards) {
   const double dhat = 0.01, fold = 0.05, cut = 0.43;
-  Cutter cutter(make_grid({Vec3(0, 0, 0), Vec3(1, 1, 1)}, {4, 4, 4}, 5));
-  cutter.cut(plane_square(Vec3(0.5, 0.5, cut), Vec3(0, 0, 1), 3));
-  const CutResult result = cutter.result();
-  ASSERT_EQ(result.mesh.num_pieces(), 2);
-  const Points& rest = result.mesh.mesh.rest();
-  const MaterialSurface& surface = result.surface;
-  const auto& copies = cutter.tet_nodes();
+  const HalvedBlock block = halved_block(cut);
+  ASSERT_EQ(block.result.mesh.num_pieces(), 2);
+  const Points& rest = block.result.mesh.mesh.rest();
+  const MaterialSurface& surface = block.result.surface;
+  const auto& copies = block.cutter.tet_nodes();
   sim::detail::SurfaceContact contact;
   sim::SurfaceContactOptions options;
   options.thickness = dhat;
-  const std::vector<std::uint8_t> fresh(copies.size(), 1);
-  contact.set_surface(surface, copies, rest, rest, fresh, options, soft().youngs_modulus);
+  set_fresh_surface(&contact, block, options);
   const double allowance = contact.guard_allowance();
   // The cut's triangles by side: the upper half's face down in the material, the lower's up.
   const TriangleSurface& s = surface.surface;
@@ -1278,10 +1279,7 @@ TEST(SurfaceContact, NoPointOfACutsFlatPolygonsSinksBeyondTheAllowanceThoughThei
   // The upper half slid along the cut by less than dhat (its polygons' rims now cross the
   // lower's near their corners), then folded down along a line across the cut while the lower
   // folds up along one the other way: each side's polygons turn apart.
-  std::vector<std::uint8_t> upper_node(static_cast<std::size_t>(rest.rows()), 0);
-  for (std::size_t copy = 0; copy < copies.size(); ++copy) {
-    for (const Index n : copies[copy]) upper_node[static_cast<std::size_t>(n)] = result.mesh.tet_piece[copy] == 0 ? 1 : 0;
-  }
+  const std::vector<std::uint8_t>& upper_node = block.upper;
   const auto tent = [](double u) { return std::max(0.0, 1 - std::abs(u - 0.5) / 0.25); };
   Points slid = rest, direction(rest.rows(), 3);
   for (Index n = 0; n < rest.rows(); ++n) {
@@ -2002,10 +2000,8 @@ TEST(SurfaceContact, ACushionPartsTheSidesOfAFreshCutGently) {
 TEST(SurfaceContact, WithACushionTheGuardsHoldSidesPartedBeyondTheThickness) {
   const double dhat = 0.01, cut = 0.43;
   const HalvedBlock block = halved_block(cut);
-  const Cutter& cutter = block.cutter;
-  const CutResult& result = block.result;
-  ASSERT_EQ(result.mesh.num_pieces(), 2);
-  const Points& rest = result.mesh.mesh.rest();
+  ASSERT_EQ(block.result.mesh.num_pieces(), 2);
+  const Points& rest = block.result.mesh.mesh.rest();
   const std::vector<std::uint8_t>& upper = block.upper;
   Points lifted = rest, down = Points::Zero(rest.rows(), 3);
   for (Index n = 0; n < rest.rows(); ++n) {
@@ -2019,8 +2015,7 @@ TEST(SurfaceContact, WithACushionTheGuardsHoldSidesPartedBeyondTheThickness) {
     sim::SurfaceContactOptions options;
     options.thickness = dhat;
     options.cushion = cushion;
-    const std::vector<std::uint8_t> fresh(cutter.tet_nodes().size(), 1);
-    contact.set_surface(result.surface, cutter.tet_nodes(), rest, rest, fresh, options, soft().youngs_modulus);
+    set_fresh_surface(&contact, block, options);
     ASSERT_GT(contact.num_joins(), 0);
     contact.lag_guards(lifted);
     if (!within_reach) {
@@ -2048,10 +2043,8 @@ TEST(SurfaceContact, WithACushionTheGuardsHoldSidesPartedBeyondTheThickness) {
 TEST(SurfaceContact, WithACushionAGuardHeldNearItsWallIsNotMadeDeeperAgain) {
   const double dhat = 0.01, cut = 0.43;
   const HalvedBlock block = halved_block(cut);
-  const Cutter& cutter = block.cutter;
-  const CutResult& result = block.result;
-  ASSERT_EQ(result.mesh.num_pieces(), 2);
-  const Points& rest = result.mesh.mesh.rest();
+  ASSERT_EQ(block.result.mesh.num_pieces(), 2);
+  const Points& rest = block.result.mesh.mesh.rest();
   const std::vector<std::uint8_t>& upper = block.upper;
   // The upper half pressed 0.9 of the allowance into the lower (past the wall, 0.75 of it), then
   // on to 0.0026 of the allowance off the walls that made.
@@ -2068,8 +2061,7 @@ TEST(SurfaceContact, WithACushionAGuardHeldNearItsWallIsNotMadeDeeperAgain) {
     sim::SurfaceContactOptions options;
     options.thickness = dhat;
     options.cushion = cushion;
-    const std::vector<std::uint8_t> fresh(cutter.tet_nodes().size(), 1);
-    contact.set_surface(result.surface, cutter.tet_nodes(), rest, rest, fresh, options, soft().youngs_modulus);
+    set_fresh_surface(&contact, block, options);
     ASSERT_GT(contact.num_joins(), 0);
     contact.lag_guards(pressed(0.9 * delta));
     ASSERT_GT(contact.num_guards(), 100) << "cushion " << cushion;
