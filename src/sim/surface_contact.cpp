@@ -175,6 +175,14 @@ std::uint64_t copy_pair(Index a, Index b) {
   return lo << 32 | hi;
 }
 
+// A pair of primitives by its indices in the surface (the vertex and the triangle, or the two
+// edges in ascending order, the top bit telling them apart): the same pair in every list made for
+// one surface, whatever its closest points.
+std::uint64_t primitive_pair(Index a, Index b, bool edges) {
+  if (edges && b < a) std::swap(a, b);
+  return (edges ? std::uint64_t{1} << 63 : 0) | static_cast<std::uint64_t>(a) << 32 | static_cast<std::uint64_t>(b);
+}
+
 }  // namespace
 
 double barrier(double d, double dhat) {
@@ -300,6 +308,7 @@ void SurfaceContact::clear_surface() {
   distances_.clear();
   friction_.clear();
   guards_.clear();
+  held_.clear();  // by the primitives' indices, which the next surface numbers anew (set_surface)
   rho_ = -1;
   y_nodes_.resize(0, 3);
   forget_measures();
@@ -560,7 +569,42 @@ void SurfaceContact::set_surface(const MaterialSurface& surface, std::span<const
   }
   std::sort(joins_.begin(), joins_.end());
   joins_.erase(std::unique(joins_.begin(), joins_.end()), joins_.end());
+  // Held: the pairs of the joins that touch in the material and are within joined_reach now, the
+  // fresh cut's two sides (a join this cut left alone is held again from where it stands: its
+  // pairs' indices were the last surface's). Marked held first, so that they are measured out to
+  // that reach.
+  for (const Candidate& c : candidates_) {
+    if (c.rest_touching && !c.neighbouring && std::binary_search(joins_.begin(), joins_.end(), c.copies)) {
+      held_.push_back(primitive_pair(c.a, c.b, c.edges != 0));
+    }
+  }
+  std::sort(held_.begin(), held_.end());
+  held_.erase(std::unique(held_.begin(), held_.end()), held_.end());
   mark_joined();
+  release_held();
+}
+
+void SurfaceContact::release_held() {
+  measure(kJoined);
+  std::vector<std::uint64_t> held;
+  append_chunks(static_cast<Index>(candidates_.size()), kNodeChunk, &held, [&](Index begin, Index end, std::vector<std::uint64_t>* out) {
+    for (Index k = begin; k < end; ++k) {
+      const Candidate& c = candidates_[static_cast<std::size_t>(k)];
+      if (c.joined && !c.neighbouring && distances_[k] < joined_reach()) out->push_back(primitive_pair(c.a, c.b, c.edges != 0));
+    }
+  });
+  std::sort(held.begin(), held.end());
+  held.erase(std::unique(held.begin(), held.end()), held.end());
+  if (held.size() == held_.size()) return;  // a subset of held_ (a joined pair is held): the same
+  held_.swap(held);
+  // The pairs released are beyond joined_reach, so beyond dhat: measured here as joined pairs,
+  // they count from now on, and what was measured and the active terms at these positions hold.
+  const unsigned measured = measured_;
+  const bool active = active_current_, active_pairs = active_pairs_current_;
+  mark_joined();
+  measured_ = measured;
+  active_current_ = active;
+  active_pairs_current_ = active_pairs;
 }
 
 void SurfaceContact::group_primitives(const Listing& vertices, const Listing& edges) {
@@ -1429,7 +1473,10 @@ void SurfaceContact::mark_joined() {
       // faces of neighbouring sticks a sliver apart (a cut 0.0123 from a lattice plane), whose
       // barrier, finite there, starts active.
       // Of neighbouring copies, joined for good: pairs near in the material, guarded where they face.
-      c.joined = c.rest_touching && (c.neighbouring || std::binary_search(joins_.begin(), joins_.end(), c.copies)) ? 1 : 0;
+      c.joined = c.rest_touching && (c.neighbouring || (std::binary_search(joins_.begin(), joins_.end(), c.copies) &&
+                                                        std::binary_search(held_.begin(), held_.end(), primitive_pair(c.a, c.b, c.edges != 0))))
+                     ? 1
+                     : 0;
       c.sutured = 0;
       if (sutured_.empty()) continue;
       const std::array<Index, 4> k = corners(c);
@@ -2131,16 +2178,21 @@ void SurfaceContact::update_joins(const Points& at) {
   for (std::size_t j = 0; j < joins_.size(); ++j) {
     if (touching[j]) joins_[kept++] = joins_[j];
   }
-  if (kept == joins_.size()) return;
-  joins_.resize(kept);
-  // The pairs that count from now on were measured here as joined pairs, and none is within dhat
-  // (a join ends only then): what was measured, and the active terms at these positions, hold.
-  const unsigned measured = measured_;
-  const bool active = active_current_, active_pairs = active_pairs_current_;
-  mark_joined();
-  measured_ = measured;
-  active_current_ = active;
-  active_pairs_current_ = active_pairs;
+  if (kept < joins_.size()) {
+    joins_.resize(kept);
+    // The pairs that count from now on were measured here as joined pairs, and none is within
+    // dhat (a join ends only then): what was measured, and the active terms at these positions,
+    // hold.
+    const unsigned measured = measured_;
+    const bool active = active_current_, active_pairs = active_pairs_current_;
+    mark_joined();
+    measured_ = measured;
+    active_current_ = active;
+    active_pairs_current_ = active_pairs;
+  }
+  // A held pair apart by more than joined_reach here is released for good (see "Released" in
+  // the header).
+  release_held();
 }
 
 }  // namespace tetcut::sim::detail

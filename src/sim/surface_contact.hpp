@@ -62,6 +62,22 @@
 // joined). The join lasts until no
 // pair of their primitives is within dhat any more (checked after every step); from then on the
 // copies collide like any others.
+// Released: within a join, a pair of primitives is held (joined, left to the guards) only while
+// it has stayed within joined_reach (dhat plus the cushion) at the end of every step since the
+// cut; once apart by more than that at a step's end it counts like any pair, for good (its
+// barrier is zero there, and conservative advancement keeps it apart from then on). Kept by the
+// primitives' indices (a key that does not change with the pair's closest points, nor with the
+// candidate list), until the surface is set again (a cut anywhere: a join that cut left alone
+// holds again the pairs within joined_reach at that moment). Why: the guards hold a side in
+// front of faces it faces, or has swung over, at a step's start; a pair that has parted and comes
+// back is no longer the two sides of a fresh cut, and may come back where they do not hold it. On
+// one path, a corner of Figure 4's sticks, 1.9 dhat in front of a neighbour's top face it
+// touched in the material only at a rim, came back over that face's rim and went round it in one
+// step, 9.7 allowances into the neighbour, where the side faces it does not face guard nothing
+// (10 crossing pairs at one frame). Counted, the corner cannot reach any of those faces. Not for
+// pairs of copies that share a node (joined for good where they face each other across a cut
+// within kNeighbourReach dhat in the material: apart by more than dhat at rest, they have not
+// parted there).
 //
 // Guards. While joined, the two sides of a cut are not left free to pass through each other:
 // each step, every vertex-triangle pair of joined copies within dhat at its start, whose vertex
@@ -614,8 +630,11 @@ class SurfaceContact {
     Listing edge_listing, vertex_listing;
     std::vector<Listing> vertex_chunks;
   } scratch_;
-  /// The candidates' joined and sutured flags, from joins_ and sutured_.
+  /// The candidates' joined and sutured flags, from joins_, held_ and sutured_.
   void mark_joined();
+  /// Measures the joined pairs and releases the held ones beyond joined_reach (see "Released"):
+  /// held_ becomes the joined pairs within it. O(candidates + held log held).
+  void release_held();
   /// proximities_ of the candidates at y_, in parallel, by kind (bits, which may be combined):
   /// those the barrier counts, the joined copies' vertex-triangle pairs (what the guards and the
   /// joins look at) or edge pairs, the others (sutured). Kinds measured at y_ already are kept,
@@ -685,6 +704,10 @@ class SurfaceContact {
   double mean_edge_ = 0;
   // Joined copy pairs, sorted; sutured copies (per copy id); the surface's rest positions.
   std::vector<std::uint64_t> joins_;
+  // The pairs of primitives of joins_ still held (see "Released"), sorted, by primitive_pair:
+  // the pairs touching in the material that have not been apart by more than joined_reach at a
+  // step's end since the surface was set. Of this surface's primitives: cleared with it.
+  std::vector<std::uint64_t> held_;
   std::vector<std::uint8_t> sutured_;
   std::vector<std::uint64_t> suture_pairs_;  // the copy pairs springs join, sorted
   // Lagged friction: per pair in contact at the step's start, its term, normal, normal force and

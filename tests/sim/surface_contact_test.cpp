@@ -23,6 +23,7 @@
 #include <memory>
 #include <numbers>
 #include <random>
+#include <set>
 
 namespace tetcut {
 namespace {
@@ -2031,6 +2032,72 @@ TEST(SurfaceContact, WithACushionTheGuardsHoldSidesPartedBeyondTheThickness) {
     EXPECT_LT(t, 0.55) << "cushion " << cushion;
     EXPECT_LE(contact.guard_excess(lifted + t * down), 0) << "cushion " << cushion;
   }
+}
+
+// A pair of the two sides of a cut is left to the guards only while it has stayed within the
+// guards' reach at every step's end since the cut; once apart by more, it counts like any pair,
+// for good: a pair that parted and comes back is no longer the two sides of a fresh cut, and may
+// come back where the guards do not hold it (a corner of Figure 4's sticks, 1.9 thicknesses in
+// front of a neighbour's face it touched only at a rim, came back round that rim into the
+// neighbour in one step, 9.7 allowances deep, where no guard held it). A join of two copies ends
+// once none of their pairs is within dhat; this is the same within a join that goes on. Here the
+// block's upper half is opened like a book about the rim where the cut meets the front face, its
+// back 10 thicknesses up and the far side of the front row of copies 2.5 up: the joins of that
+// row go on, and their pairs beyond the reach count from the end of that step on, and still count
+// once the book is shut again. (Before, 85 such pairs of the front row's joins, up to 1.8 dhat
+// apart, were still left out.)
+TEST(SurfaceContact, PairsOfACutThatPartedBeyondTheGuardsReachCountFromThenOn) {
+  const double dhat = 0.01, cut = 0.43, opening = 0.1;
+  const HalvedBlock block = halved_block(cut);
+  ASSERT_EQ(block.result.mesh.num_pieces(), 2);
+  const Points& rest = block.result.mesh.mesh.rest();
+  Points opened = rest;
+  const Eigen::Matrix3d turn = Eigen::AngleAxisd(opening, Vec3::UnitX()).toRotationMatrix();
+  const Vec3 hinge(0, 0, cut);
+  for (Index n = 0; n < rest.rows(); ++n) {
+    if (block.upper[static_cast<std::size_t>(n)]) opened.row(n) = (hinge + turn * (rest.row(n).transpose() - hinge)).transpose();
+  }
+  sim::detail::SurfaceContact contact;
+  sim::SurfaceContactOptions options;
+  options.thickness = dhat;
+  set_fresh_surface(&contact, block, options);
+  // The pairs the barrier leaves out (joined), each with its distance at node positions `at`.
+  const auto left_out = [&](const Points& at) {
+    const Points y = block.result.surface.positions(block.cutter.tet_nodes(), at);
+    const auto corner = [&](Index v) { return Vec3(y.row(v).transpose()); };
+    const auto& triangles = block.result.surface.surface.triangles;
+    const auto& edges = contact.edge_list();
+    std::vector<std::uint8_t> counted;
+    const std::vector<std::array<Index, 3>> pairs = contact.candidate_pairs(nullptr, &counted);
+    std::map<std::array<Index, 3>, double> out;
+    for (std::size_t k = 0; k < pairs.size(); ++k) {
+      if (counted[k]) continue;
+      const auto [is_edges, a, b] = pairs[k];
+      if (is_edges) {
+        const auto& e = edges[static_cast<std::size_t>(a)];
+        const auto& f = edges[static_cast<std::size_t>(b)];
+        out[{1, std::min(a, b), std::max(a, b)}] = collision::segment_segment(corner(e[0]), corner(e[1]), corner(f[0]), corner(f[1])).distance;
+      } else {
+        out[pairs[k]] = collision::point_triangle(corner(a), corner(triangles(b, 0)), corner(triangles(b, 1)), corner(triangles(b, 2))).distance;
+      }
+    }
+    return out;
+  };
+  const std::map<std::array<Index, 3>, double> fresh = left_out(rest);
+  ASSERT_GT(fresh.size(), 500u);
+  contact.update_joins(opened);  // a step ends with the book open
+  ASSERT_GT(contact.num_joins(), 0) << "the hinge still touches";
+  const std::map<std::array<Index, 3>, double> held = left_out(opened);
+  EXPECT_GT(held.size(), 100u) << "near the hinge";
+  for (const auto& [pair, distance] : held) {
+    EXPECT_EQ(fresh.count(pair), 1u) << "only pairs left out at the cut are";
+    EXPECT_LE(distance, contact.joined_reach()) << "pair " << pair[0] << " " << pair[1] << " " << pair[2];
+  }
+  contact.update_joins(rest);  // and a step ends with it shut again
+  const std::map<std::array<Index, 3>, double> again = left_out(rest);
+  EXPECT_GT(again.size(), 100u);
+  EXPECT_LT(again.size(), fresh.size() / 2);
+  for (const auto& [pair, distance] : again) EXPECT_EQ(held.count(pair), 1u) << "a pair released is released for good";
 }
 
 // A side pressed past its guards' wall is guarded from where it is, its wall a little deeper.
