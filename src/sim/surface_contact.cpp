@@ -601,11 +601,23 @@ void SurfaceContact::set_surface(const MaterialSurface& surface, std::span<const
 
 void SurfaceContact::release_held() {
   measure(kJoined);
+  const auto still_held = [&](Index k) {
+    const Candidate& c = candidates_[static_cast<std::size_t>(k)];
+    return c.joined && !c.neighbouring && distances_[k] < joined_reach();
+  };
+  // Most steps release nothing: every held pair is listed (once) and still within the reach.
+  std::vector<Index> counts;
+  append_chunks(static_cast<Index>(candidates_.size()), kNodeChunk, &counts, [&](Index begin, Index end, std::vector<Index>* out) {
+    Index count = 0;
+    for (Index k = begin; k < end; ++k) count += still_held(k) ? 1 : 0;
+    out->push_back(count);
+  });
+  if (std::accumulate(counts.begin(), counts.end(), Index{0}) == static_cast<Index>(held_.size())) return;
   std::vector<std::uint64_t> held;
   append_chunks(static_cast<Index>(candidates_.size()), kNodeChunk, &held, [&](Index begin, Index end, std::vector<std::uint64_t>* out) {
     for (Index k = begin; k < end; ++k) {
       const Candidate& c = candidates_[static_cast<std::size_t>(k)];
-      if (c.joined && !c.neighbouring && distances_[k] < joined_reach()) out->push_back(primitive_pair(c.a, c.b, c.edges != 0));
+      if (still_held(k)) out->push_back(primitive_pair(c.a, c.b, c.edges != 0));
     }
   });
   std::sort(held.begin(), held.end());
