@@ -331,8 +331,7 @@ class Simulator {
   /// neighbours (share a node), unless they face each other across a cut (then those near each
   /// other in the material are guarded as below, the others counted), copies a cut has just separated until their surfaces have moved
   /// apart (their vertices are only guarded against going more than a tenth of the thickness
-  /// behind the other side's triangles; a pair of them that has been apart by more than the
-  /// thickness plus the cushion at a step's end counts from then on, for good), and, while springs (add_spring) suture an incision, pairs between the copies they
+  /// behind the other side's triangles), and, while springs (add_spring) suture an incision, pairs between the copies they
   /// hold that were within the thickness of each other in the material (the springs pull them
   /// back together) (see src/sim/surface_contact.hpp for the rule, why it should not miss a
   /// collision for long, and what it may still miss). Give the surface again after every cut (remesh drops it, as it drops

@@ -175,14 +175,6 @@ std::uint64_t copy_pair(Index a, Index b) {
   return lo << 32 | hi;
 }
 
-// A pair of primitives by its indices in the surface (the vertex and the triangle, or the two
-// edges in ascending order, the top bit telling them apart): the same pair in every list made for
-// one surface, whatever its closest points.
-std::uint64_t primitive_pair(Index a, Index b, bool edges) {
-  if (edges && b < a) std::swap(a, b);
-  return (edges ? std::uint64_t{1} << 63 : 0) | static_cast<std::uint64_t>(a) << 32 | static_cast<std::uint64_t>(b);
-}
-
 }  // namespace
 
 double barrier(double d, double dhat) {
@@ -282,7 +274,6 @@ void SurfaceContact::lag_friction(const Points& start) {
 void SurfaceContact::reset() {
   clear_surface();
   joins_.clear();
-  released_.clear();
   copy_cut_step_.clear();
   steps_ = 0;
   sutured_.clear();
@@ -309,10 +300,6 @@ void SurfaceContact::clear_surface() {
   distances_.clear();
   friction_.clear();
   guards_.clear();
-  held_.clear();  // by the primitives' indices, which the next surface numbers anew (set_surface)
-  vertex_alone_.clear();
-  edge_alone_.clear();
-  triangle_alone_.clear();
   rho_ = -1;
   y_nodes_.resize(0, 3);
   forget_measures();
@@ -573,75 +560,7 @@ void SurfaceContact::set_surface(const MaterialSurface& surface, std::span<const
   }
   std::sort(joins_.begin(), joins_.end());
   joins_.erase(std::unique(joins_.begin(), joins_.end()), joins_.end());
-  // Released pairs whose copies this cut changed are no more (a fresh cut there is held anew).
-  const auto copies_changed = [&](std::uint64_t copies) {
-    return was_changed(static_cast<Index>(copies >> 32)) || was_changed(static_cast<Index>(copies & 0xffffffffu));
-  };
-  std::erase_if(released_, [&](const ReleasedPlace& r) { return copies_changed(r.copies); });
-  // Held: the pairs of the joins that touch in the material and are within joined_reach now, the
-  // fresh cut's two sides, less those of joins this cut left alone that were released before
-  // (never one touching now: counted, its barrier would be infinite). Marked held first, so that
-  // they are measured out to that reach.
-  for (std::size_t k = 0; k < candidates_.size(); ++k) {
-    const Candidate& c = candidates_[k];
-    if (!c.rest_touching || c.neighbouring || !std::binary_search(joins_.begin(), joins_.end(), c.copies)) continue;
-    const std::uint64_t key = primitive_pair(c.a, c.b, c.edges != 0);
-    ReleasedPlace place;
-    if (!released_.empty() && !copies_changed(c.copies) && distances_[k] > 0 && released_place(key, &place) &&
-        std::binary_search(released_.begin(), released_.end(), place)) {
-      continue;
-    }
-    held_.push_back(key);
-  }
-  std::sort(held_.begin(), held_.end());
-  held_.erase(std::unique(held_.begin(), held_.end()), held_.end());
   mark_joined();
-  release_held();
-}
-
-void SurfaceContact::release_held() {
-  measure(kJoined);
-  const auto still_held = [&](Index k) {
-    const Candidate& c = candidates_[static_cast<std::size_t>(k)];
-    return c.joined && !c.neighbouring && distances_[k] < joined_reach();
-  };
-  // Most steps release nothing: every held pair is listed (once) and still within the reach.
-  std::vector<Index> counts;
-  append_chunks(static_cast<Index>(candidates_.size()), kNodeChunk, &counts, [&](Index begin, Index end, std::vector<Index>* out) {
-    Index count = 0;
-    for (Index k = begin; k < end; ++k) count += still_held(k) ? 1 : 0;
-    out->push_back(count);
-  });
-  if (std::accumulate(counts.begin(), counts.end(), Index{0}) == static_cast<Index>(held_.size())) return;
-  std::vector<std::uint64_t> held;
-  append_chunks(static_cast<Index>(candidates_.size()), kNodeChunk, &held, [&](Index begin, Index end, std::vector<std::uint64_t>* out) {
-    for (Index k = begin; k < end; ++k) {
-      const Candidate& c = candidates_[static_cast<std::size_t>(k)];
-      if (still_held(k)) out->push_back(primitive_pair(c.a, c.b, c.edges != 0));
-    }
-  });
-  std::sort(held.begin(), held.end());
-  held.erase(std::unique(held.begin(), held.end()), held.end());
-  if (held.size() == held_.size()) return;  // a subset of held_ (a joined pair is held): the same
-  std::vector<std::uint64_t> dropped;
-  std::set_difference(held_.begin(), held_.end(), held.begin(), held.end(), std::back_inserter(dropped));
-  const auto before = static_cast<std::ptrdiff_t>(released_.size());
-  for (const std::uint64_t key : dropped) {
-    ReleasedPlace place;
-    if (released_place(key, &place)) released_.push_back(place);
-  }
-  std::sort(released_.begin() + before, released_.end());
-  std::inplace_merge(released_.begin(), released_.begin() + before, released_.end());
-  released_.erase(std::unique(released_.begin(), released_.end()), released_.end());
-  held_.swap(held);
-  // The pairs released are beyond joined_reach, so beyond dhat: measured here as joined pairs,
-  // they count from now on, and what was measured and the active terms at these positions hold.
-  const unsigned measured = measured_;
-  const bool active = active_current_, active_pairs = active_pairs_current_;
-  mark_joined();
-  measured_ = measured;
-  active_current_ = active;
-  active_pairs_current_ = active_pairs;
 }
 
 void SurfaceContact::group_primitives(const Listing& vertices, const Listing& edges) {
@@ -1284,75 +1203,6 @@ void SurfaceContact::cover(const Points& at, const Points* move_end, double move
   rebuild(2 * reach + move_relative, move_end == nullptr);
 }
 
-bool SurfaceContact::released_place(std::uint64_t key, ReleasedPlace* out) {
-  const auto at = [&](Index v) { return std::array<double, 3>{rest_y_(v, 0), rest_y_(v, 1), rest_y_(v, 2)}; };
-  // A primitive's place: its copy and its corners' rest positions, in an order that does not
-  // depend on the numbering (a triangle's from its least corner on, keeping its orientation).
-  using Place = std::array<double, 10>;
-  const auto vertex_place = [&](Index v) {
-    Place p{};
-    p[0] = static_cast<double>(vertex_copy_[static_cast<std::size_t>(v)]);
-    const auto x = at(v);
-    std::copy(x.begin(), x.end(), p.begin() + 1);
-    return p;
-  };
-  const auto edge_place = [&](Index e) {
-    Place p{};
-    p[0] = static_cast<double>(edge_copy_[static_cast<std::size_t>(e)]);
-    auto x = at(edges_[static_cast<std::size_t>(e)][0]), y = at(edges_[static_cast<std::size_t>(e)][1]);
-    if (y < x) std::swap(x, y);
-    std::copy(x.begin(), x.end(), p.begin() + 1);
-    std::copy(y.begin(), y.end(), p.begin() + 4);
-    return p;
-  };
-  const auto triangle_place = [&](Index t) {
-    Place p{};
-    p[0] = static_cast<double>(triangle_copy_[static_cast<std::size_t>(t)]);
-    const auto& c = triangles_[static_cast<std::size_t>(t)];
-    const std::array<std::array<double, 3>, 3> x{at(c[0]), at(c[1]), at(c[2])};
-    const auto least = static_cast<std::size_t>(std::min_element(x.begin(), x.end()) - x.begin());
-    for (std::size_t k = 0; k < 3; ++k) std::copy(x[(least + k) % 3].begin(), x[(least + k) % 3].end(), p.begin() + 1 + 3 * static_cast<std::ptrdiff_t>(k));
-    return p;
-  };
-  // Whether each place names its primitive alone, found once per surface: O(n log n) each.
-  const auto alone = [](Index n, const auto& place_of, std::vector<std::uint8_t>* flags) {
-    std::vector<std::pair<Place, Index>> places(static_cast<std::size_t>(n));
-    for (Index i = 0; i < n; ++i) places[static_cast<std::size_t>(i)] = {place_of(i), i};
-    std::sort(places.begin(), places.end());
-    flags->assign(static_cast<std::size_t>(n), 1);
-    for (std::size_t i = 1; i < places.size(); ++i) {
-      if (places[i].first == places[i - 1].first) (*flags)[static_cast<std::size_t>(places[i].second)] = (*flags)[static_cast<std::size_t>(places[i - 1].second)] = 0;
-    }
-  };
-  if (vertex_alone_.empty()) {
-    alone(static_cast<Index>(vertex_copy_.size()), vertex_place, &vertex_alone_);
-    alone(static_cast<Index>(edges_.size()), edge_place, &edge_alone_);
-    alone(static_cast<Index>(triangles_.size()), triangle_place, &triangle_alone_);
-  }
-  const bool edges = (key >> 63) != 0;
-  const auto a = static_cast<Index>((key >> 32) & 0x7fffffffu), b = static_cast<Index>(key & 0xffffffffu);
-  Place first, second;
-  if (edges) {
-    if (!edge_alone_[static_cast<std::size_t>(a)] || !edge_alone_[static_cast<std::size_t>(b)]) return false;
-    first = edge_place(a);
-    second = edge_place(b);
-    if (second < first) std::swap(first, second);
-    out->copies = copy_pair(edge_copy_[static_cast<std::size_t>(a)], edge_copy_[static_cast<std::size_t>(b)]);
-  } else {
-    if (!vertex_alone_[static_cast<std::size_t>(a)] || !triangle_alone_[static_cast<std::size_t>(b)]) return false;
-    first = vertex_place(a);
-    second = triangle_place(b);
-    out->copies = copy_pair(vertex_copy_[static_cast<std::size_t>(a)], triangle_copy_[static_cast<std::size_t>(b)]);
-  }
-  // Kind, then the first primitive's copy and corners (4 for a vertex, 7 for an edge), then the
-  // second's (10 for a triangle, 7 for an edge): 15 either way.
-  out->place[0] = edges ? 1 : 0;
-  const std::size_t first_size = edges ? 7 : 4;
-  std::copy(first.begin(), first.begin() + static_cast<std::ptrdiff_t>(first_size), out->place.begin() + 1);
-  std::copy(second.begin(), second.begin() + static_cast<std::ptrdiff_t>(14 - first_size), out->place.begin() + 1 + static_cast<std::ptrdiff_t>(first_size));
-  return true;
-}
-
 void SurfaceContact::rebuild(double rho, bool made_now) {
   const PartTimer timer(&part_seconds_.rebuild, nullptr);
   rho_ = rho;
@@ -1579,10 +1429,7 @@ void SurfaceContact::mark_joined() {
       // faces of neighbouring sticks a sliver apart (a cut 0.0123 from a lattice plane), whose
       // barrier, finite there, starts active.
       // Of neighbouring copies, joined for good: pairs near in the material, guarded where they face.
-      c.joined = c.rest_touching && (c.neighbouring || (std::binary_search(joins_.begin(), joins_.end(), c.copies) &&
-                                                        std::binary_search(held_.begin(), held_.end(), primitive_pair(c.a, c.b, c.edges != 0))))
-                     ? 1
-                     : 0;
+      c.joined = c.rest_touching && (c.neighbouring || std::binary_search(joins_.begin(), joins_.end(), c.copies)) ? 1 : 0;
       c.sutured = 0;
       if (sutured_.empty()) continue;
       const std::array<Index, 4> k = corners(c);
@@ -2284,21 +2131,16 @@ void SurfaceContact::update_joins(const Points& at) {
   for (std::size_t j = 0; j < joins_.size(); ++j) {
     if (touching[j]) joins_[kept++] = joins_[j];
   }
-  if (kept < joins_.size()) {
-    joins_.resize(kept);
-    // The pairs that count from now on were measured here as joined pairs, and none is within
-    // dhat (a join ends only then): what was measured, and the active terms at these positions,
-    // hold.
-    const unsigned measured = measured_;
-    const bool active = active_current_, active_pairs = active_pairs_current_;
-    mark_joined();
-    measured_ = measured;
-    active_current_ = active;
-    active_pairs_current_ = active_pairs;
-  }
-  // A held pair apart by more than joined_reach here is released for good (see "Released" in
-  // the header).
-  release_held();
+  if (kept == joins_.size()) return;
+  joins_.resize(kept);
+  // The pairs that count from now on were measured here as joined pairs, and none is within dhat
+  // (a join ends only then): what was measured, and the active terms at these positions, hold.
+  const unsigned measured = measured_;
+  const bool active = active_current_, active_pairs = active_pairs_current_;
+  mark_joined();
+  measured_ = measured;
+  active_current_ = active;
+  active_pairs_current_ = active_pairs;
 }
 
 }  // namespace tetcut::sim::detail

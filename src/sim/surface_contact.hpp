@@ -62,24 +62,6 @@
 // joined). The join lasts until no
 // pair of their primitives is within dhat any more (checked after every step); from then on the
 // copies collide like any others.
-// Released: within a join, a pair of primitives is held (joined, left to the guards) only while
-// it has stayed within joined_reach (dhat plus the cushion) at the end of every step since the
-// cut; once apart by more than that at a step's end it counts like any pair, for good (its
-// barrier is zero there, and conservative advancement keeps it apart from then on). Kept by the
-// primitives' indices (a key that does not change with the pair's closest points, nor with the
-// candidate list), and across surfaces (a cut elsewhere renumbers them) by where the pair lies in
-// the material: its copies and its corners' rest positions, while neither copy changes (a pair
-// whose place does not name it alone, the two sides of a slit within one tet, is held again by
-// the next surface where it is within joined_reach). Why: the guards hold a side in
-// front of faces it faces, or has swung over, at a step's start; a pair that has parted and comes
-// back is no longer the two sides of a fresh cut, and may come back where they do not hold it. On
-// one path, a corner of Figure 4's sticks, 1.9 dhat in front of a neighbour's top face it
-// touched in the material only at a rim, came back over that face's rim and went round it in one
-// step, 9.7 allowances into the neighbour, where the side faces it does not face guard nothing
-// (10 crossing pairs at one frame). Counted, the corner cannot reach any of those faces. Not for
-// pairs of copies that share a node (joined for good where they face each other across a cut
-// within kNeighbourReach dhat in the material: apart by more than dhat at rest, they have not
-// parted there).
 //
 // Guards. While joined, the two sides of a cut are not left free to pass through each other:
 // each step, every vertex-triangle pair of joined copies within dhat at its start, whose vertex
@@ -152,16 +134,14 @@
 // that reach, and 81 sticks crossed in 5 pairs at one frame with a cushion of dhat (in none with
 // half of it).
 // Why this should not miss a real collision for long, and where it does: copies are joined only
-// while some of their surfaces are still touching where they were cut apart, and a pair of them
-// only while it has never parted by more than joined_reach (Released); a copy spans one
+// while some of their surfaces are still touching where they were cut apart; a copy spans one
 // tet, so only the two sides of a cut within a tet of each other are affected, and there they are
-// guarded, not ignored; what goes unseen is edge-edge crossings of held pairs whose edges lie
+// guarded, not ignored; what goes unseen is edge-edge crossings of joined copies whose edges lie
 // on no faces turned against each other in the material, and vertices that do not face
 // the triangle they approach in the material (a cut's rim meeting the other side's outer surface)
-// while none of their faces has turned against it by 120 degrees, when they come within one step
-// from within joined_reach (a pair from farther away is released and counted), bounded by the
-// allowance while their neighbours are guarded, and counted by the exact check
-// (count_surface_intersections) if they go deeper. Pieces that stay in contact (a pile of sticks)
+// while none of their faces has turned against it by 120 degrees, bounded by the allowance while
+// their neighbours are guarded, and counted by the exact check (count_surface_intersections) if
+// they go deeper. Pieces that stay in contact (a pile of sticks)
 // stay joined for good, and there the vertex guards alone lapsed (a vertex carried more than dhat
 // past the face it faced) while the edge behind it sagged through the neighbour's corner: Figure
 // 4's pile crossed in up to 1,147 pairs, most deeper than six allowances; the edge guards (above)
@@ -634,12 +614,8 @@ class SurfaceContact {
     Listing edge_listing, vertex_listing;
     std::vector<Listing> vertex_chunks;
   } scratch_;
-  /// The candidates' joined and sutured flags, from joins_, held_ and sutured_.
+  /// The candidates' joined and sutured flags, from joins_ and sutured_.
   void mark_joined();
-  /// Measures the joined pairs and releases the held ones beyond joined_reach (see "Released"):
-  /// held_ becomes the joined pairs within it, and the pairs it drops go to released_.
-  /// O(candidates + held log held + released).
-  void release_held();
   /// proximities_ of the candidates at y_, in parallel, by kind (bits, which may be combined):
   /// those the barrier counts, the joined copies' vertex-triangle pairs (what the guards and the
   /// joins look at) or edge pairs, the others (sutured). Kinds measured at y_ already are kept,
@@ -709,29 +685,6 @@ class SurfaceContact {
   double mean_edge_ = 0;
   // Joined copy pairs, sorted; sutured copies (per copy id); the surface's rest positions.
   std::vector<std::uint64_t> joins_;
-  // The pairs of primitives of joins_ still held (see "Released"), sorted, by primitive_pair:
-  // the pairs touching in the material that have not been apart by more than joined_reach at a
-  // step's end since the surface was set. Of this surface's primitives: cleared with it.
-  std::vector<std::uint64_t> held_;
-  // The pairs released, by where they lie in the material, kept across surfaces (a cut elsewhere
-  // renumbers the primitives): the copy pair, and the pair's place (see released_place). Sorted.
-  // Dropped where a cut changes one of their copies (kept when their join ends: all its pairs
-  // count then, and a new join needs a changed copy).
-  struct ReleasedPlace {
-    std::uint64_t copies;  // the pair's own copies (a vertex's, a triangle's, an edge's), (min << 32) | max
-    std::array<double, 15> place;
-    auto operator<=>(const ReleasedPlace&) const = default;
-  };
-  std::vector<ReleasedPlace> released_;
-  /// Where pair `key` (primitive_pair) lies in the material, into *out: its kind, then per
-  /// primitive its own copy and its corners' rest positions (a triangle's in their order from the
-  /// least, an edge's least first; two edges the lesser first). False where that does not name
-  /// the pair alone (a vertex, edge or triangle of one copy at the rest place of another of that
-  /// copy: the two sides of a slit within a tet).
-  bool released_place(std::uint64_t key, ReleasedPlace* out);
-  // Per vertex, edge and triangle: whether its copy and rest place name it alone (see
-  // released_place); found the first time they are asked for on a surface.
-  std::vector<std::uint8_t> vertex_alone_, edge_alone_, triangle_alone_;
   std::vector<std::uint8_t> sutured_;
   std::vector<std::uint64_t> suture_pairs_;  // the copy pairs springs join, sorted
   // Lagged friction: per pair in contact at the step's start, its term, normal, normal force and

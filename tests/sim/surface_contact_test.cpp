@@ -23,7 +23,6 @@
 #include <memory>
 #include <numbers>
 #include <random>
-#include <set>
 
 namespace tetcut {
 namespace {
@@ -2032,131 +2031,6 @@ TEST(SurfaceContact, WithACushionTheGuardsHoldSidesPartedBeyondTheThickness) {
     EXPECT_LT(t, 0.55) << "cushion " << cushion;
     EXPECT_LE(contact.guard_excess(lifted + t * down), 0) << "cushion " << cushion;
   }
-}
-
-// A pair of the two sides of a cut is left to the guards only while it has stayed within the
-// guards' reach at every step's end since the cut; once apart by more, it counts like any pair,
-// for good: a pair that parted and comes back is no longer the two sides of a fresh cut, and may
-// come back where the guards do not hold it (a corner of Figure 4's sticks, 1.9 thicknesses in
-// front of a neighbour's face it touched only at a rim, came back round that rim into the
-// neighbour in one step, 9.7 allowances deep, where no guard held it). A join of two copies ends
-// once none of their pairs is within dhat; this is the same within a join that goes on. Here the
-// block's upper half is opened like a book about the rim where the cut meets the front face, its
-// back 10 thicknesses up and the far side of the front row of copies 2.5 up: the joins of that
-// row go on, and their pairs beyond the reach count from the end of that step on, and still count
-// after a cut elsewhere (across the back, at y = 0.8, the book nearly shut: they are within the
-// reach again), which numbers the surface anew, and once the book is shut. (Before, 85 pairs of
-// the block's joins that went on, up to 1.8 dhat apart, were still left out; and without their
-// places kept across surfaces, the cut held 27 of the front row's again.)
-TEST(SurfaceContact, PairsOfACutThatPartedBeyondTheGuardsReachCountFromThenOn) {
-  const double dhat = 0.01, cut = 0.43;
-  HalvedBlock block = halved_block(cut);
-  ASSERT_EQ(block.result.mesh.num_pieces(), 2);
-  const Points rest = block.result.mesh.mesh.rest();
-  // The upper half turned by `angle` about the hinge.
-  const auto open_by = [&](double angle) {
-    Points x = rest;
-    const Eigen::Matrix3d turn = Eigen::AngleAxisd(angle, Vec3::UnitX()).toRotationMatrix();
-    const Vec3 hinge(0, 0, cut);
-    for (Index n = 0; n < rest.rows(); ++n) {
-      if (block.upper[static_cast<std::size_t>(n)]) x.row(n) = (hinge + turn * (rest.row(n).transpose() - hinge)).transpose();
-    }
-    return x;
-  };
-  const Points opened = open_by(0.1), nearly_shut = open_by(0.02);
-  sim::detail::SurfaceContact contact;
-  sim::SurfaceContactOptions options;
-  options.thickness = dhat;
-  set_fresh_surface(&contact, block, options);
-  // The pairs the barrier leaves out (joined) of the front row of copies (every corner in front of
-  // y = 0.25 in the material), each by its corners' rest positions (the same pair on any surface),
-  // with its distance at node positions `at`.
-  using Place = std::vector<double>;
-  const auto left_out = [&](const MaterialSurface& surface, const Points& at) {
-    const Points y = surface.positions(block.cutter.tet_nodes(), at);
-    const auto& x = surface.surface.vertices;
-    const auto corner = [&](Index v) { return Vec3(y.row(v).transpose()); };
-    const auto& triangles = surface.surface.triangles;
-    const auto& edges = contact.edge_list();
-    const auto place = [&](std::vector<Index> first, std::vector<Index> second, bool is_edges) {
-      std::vector<Place> parts;
-      for (const auto* corners : {&first, &second}) {
-        Place part;
-        std::vector<std::array<double, 3>> points;
-        for (const Index v : *corners) points.push_back({x(v, 0), x(v, 1), x(v, 2)});
-        std::sort(points.begin(), points.end());
-        for (const auto& p : points) part.insert(part.end(), p.begin(), p.end());
-        parts.push_back(part);
-      }
-      if (is_edges) std::sort(parts.begin(), parts.end());
-      Place out{is_edges ? 1.0 : 0.0};
-      for (const Place& part : parts) out.insert(out.end(), part.begin(), part.end());
-      return out;
-    };
-    std::vector<std::uint8_t> counted;
-    const std::vector<std::array<Index, 3>> pairs = contact.candidate_pairs(nullptr, &counted);
-    std::map<Place, double> out;
-    for (std::size_t k = 0; k < pairs.size(); ++k) {
-      if (counted[k]) continue;
-      const auto [is_edges, a, b] = pairs[k];
-      std::vector<Index> first, second;
-      double distance = 0;
-      if (is_edges) {
-        const auto& e = edges[static_cast<std::size_t>(a)];
-        const auto& f = edges[static_cast<std::size_t>(b)];
-        first = {e[0], e[1]};
-        second = {f[0], f[1]};
-        distance = collision::segment_segment(corner(e[0]), corner(e[1]), corner(f[0]), corner(f[1])).distance;
-      } else {
-        first = {a};
-        second = {triangles(b, 0), triangles(b, 1), triangles(b, 2)};
-        distance = collision::point_triangle(corner(a), corner(second[0]), corner(second[1]), corner(second[2])).distance;
-      }
-      bool front = true;
-      for (const auto* corners : {&first, &second}) {
-        for (const Index v : *corners) front = front && x(v, 1) < 0.25;
-      }
-      if (front) out[place(first, second, is_edges != 0)] = distance;
-    }
-    return out;
-  };
-  const std::map<Place, double> fresh = left_out(block.result.surface, rest);
-  ASSERT_GT(fresh.size(), 200u);
-  contact.update_joins(opened);  // a step ends with the book open
-  ASSERT_GT(contact.num_joins(), 0) << "the hinge still touches";
-  const std::map<Place, double> held = left_out(block.result.surface, opened);
-  EXPECT_GT(held.size(), 50u) << "near the hinge";
-  EXPECT_LT(held.size() + 20, fresh.size()) << "the rest, parted, count";
-  for (const auto& [pair, distance] : held) {
-    EXPECT_EQ(fresh.count(pair), 1u) << "only pairs left out at the cut are";
-    EXPECT_LE(distance, contact.joined_reach());
-  }
-  // A cut across the back, the book nearly shut (the front row's far side half a thickness up,
-  // within the reach, its released pairs apart): it changes none of the front row's copies, and
-  // numbers the surface anew.
-  const Index copies_before = static_cast<Index>(block.cutter.tet_nodes().size());
-  const CutBatchReport report = block.cutter.cut(plane_square(Vec3(0.5, 0.8, 0.5), Vec3(0, 1, 0), 3));
-  ASSERT_GT(report.tets_touched, 0);
-  const CutResult recut = block.cutter.result();
-  std::vector<std::uint8_t> changed(block.cutter.tet_nodes().size(), 0);
-  for (std::size_t copy = static_cast<std::size_t>(copies_before); copy < changed.size(); ++copy) changed[copy] = 1;
-  for (const Index t : report.touched) {
-    for (const Index copy : block.cutter.copies_of(t)) changed[static_cast<std::size_t>(copy)] = 1;
-  }
-  for (const Index copy : report.changed_tets) changed[static_cast<std::size_t>(copy)] = 1;
-  Points now(recut.mesh.mesh.rest().rows(), 3);
-  now.topRows(nearly_shut.rows()) = nearly_shut;
-  for (std::size_t i = 0; i < report.new_node_source.size(); ++i) {
-    now.row(report.first_new_node + static_cast<Index>(i)) = nearly_shut.row(report.new_node_source[i]);
-  }
-  contact.set_surface(recut.surface, block.cutter.tet_nodes(), recut.mesh.mesh.rest(), now, changed, options, soft().youngs_modulus);
-  const std::map<Place, double> after_cut = left_out(recut.surface, now);
-  EXPECT_EQ(after_cut.size(), held.size()) << "still released after the cut";
-  for (const auto& [pair, distance] : after_cut) EXPECT_EQ(held.count(pair), 1u) << "a pair released is released for good";
-  contact.update_joins(recut.mesh.mesh.rest());  // and a step ends with the book shut again
-  const std::map<Place, double> again = left_out(recut.surface, recut.mesh.mesh.rest());
-  EXPECT_EQ(again.size(), held.size());
-  for (const auto& [pair, distance] : again) EXPECT_EQ(held.count(pair), 1u) << "a pair released is released for good";
 }
 
 // A side pressed past its guards' wall is guarded from where it is, its wall a little deeper.
